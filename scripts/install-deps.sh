@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Installs the Debian packages bisect builds and tests with. Idempotent: a
+# no-op when everything is present. Runs as root (or through sudo).
+set -euo pipefail
+packages=(cmake g++ make libvtk9-dev libcli11-dev nlohmann-json3-dev catch2)
+# Optional extras: gmsh (remaking data/), python3-matplotlib (PNG plots).
+[[ "${BISECT_WITH_PLOTS:-0}" == 1 ]] && packages+=(python3-matplotlib python3-numpy)
+[[ "${BISECT_WITH_GMSH:-0}" == 1 ]] && packages+=(gmsh)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "install-deps: installing ${missing[*]}" >&2
+  SUDO=""
+  [[ $(id -u) -ne 0 ]] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi

@@ -1,0 +1,36 @@
+// Conformity checks (ALGORITHMS.md §7), shared by the tests and `bisect check`.
+#pragma once
+
+#include "mesh.hpp"
+
+#include <string>
+
+namespace bisect {
+
+// Quantities refinement must leave unchanged.
+struct Invariants {
+  double volume = 0;           // sum of |cell volume|
+  double boundary_measure = 0; // sum of measures of facets owned by one cell
+  long long euler = 0;         // V - E + F - ... over the used vertices
+  std::size_t boundary_facets = 0;
+};
+Invariants measure_invariants(const Mesh &mesh);
+
+struct CheckResult {
+  bool ok = true;
+  std::string failure; // the first failure, one line; empty when ok
+};
+
+// Checks: every facet shared by at most two cells; no degenerate cell; across
+// every interior facet the two opposite vertices lie on opposite sides (no
+// inverted or folded cell); and, when `original` is given, volume, boundary
+// measure (relative tolerance 1e-9) and Euler characteristic unchanged.
+CheckResult check_conformity(const Mesh &mesh, const Invariants *original = nullptr);
+
+// Validates a freshly read mesh and orients every cell positively. Throws
+// InputError naming `path`: NaN/Inf coordinates, ids out of range, repeated
+// vertex in a cell, zero-volume cells, a facet shared by three or more cells,
+// a hanging node (a vertex lying inside an edge of a cell not containing it).
+void prepare_input(Mesh &mesh, const std::string &path);
+
+} // namespace bisect

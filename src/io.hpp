@@ -1,0 +1,28 @@
+// Reading and writing meshes. The format is chosen by the file extension:
+// `.vtu` (VTK XML unstructured grid) and `.msh` (Gmsh 2.2 and 4.1).
+#pragma once
+
+#include "mesh.hpp"
+
+#include <string>
+
+namespace bisect {
+
+// Reads the cells of the highest dimension present (triangles -> 2D when all z
+// are 0, tetrahedra -> 3D, pentatopes in the 4D .vtu convention -> 4D).
+// Cells are returned in file order, unmarked (mesh.stage empty). Cell data and
+// point data become DataArrays; Gmsh tags become cell arrays
+// "gmsh:physical" and "gmsh:geometrical". Throws InputError naming the file.
+Mesh read_mesh(const std::string &path);
+
+// Writes `mesh` as given (cells in their stored vertex order) to `path`,
+// through a temporary file in the same directory renamed when complete.
+void write_mesh(const std::string &path, const Mesh &mesh);
+
+// Format-specific entry points (used by read_mesh/write_mesh and the tests).
+Mesh read_msh(const std::string &path);
+void write_msh(const std::string &path, const Mesh &mesh);
+Mesh read_vtu(const std::string &path);
+void write_vtu(const std::string &path, const Mesh &mesh);
+
+} // namespace bisect

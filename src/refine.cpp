@@ -1,0 +1,335 @@
+// Refine to conformity by bisection (ALGORITHMS.md §1, §6; seed 000 Procedure
+// 1; seed 002 §4). The kernels are templated on the dimension and
+// instantiated for 2, 3 and 4 in one place (dispatch at the bottom).
+//
+// One pass bisects a list of cells in place: child 1 takes the parent's slot,
+// child 2 is appended. Midpoints are shared through a hash map from the edge
+// (sorted id pair) to the new vertex, cleared after every iteration: once an
+// iteration is conforming no cell has an edge that was bisected.
+#include "refine.hpp"
+
+#include "mark.hpp"
+#include "numbering.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace bisect {
+
+namespace {
+
+// Open-addressing map from an edge key (min << 32 | max, never 0) to the id
+// of its midpoint.
+class MidpointMap {
+public:
+  static std::uint64_t key(VertexId a, VertexId b) {
+    if (a > b) std::swap(a, b);
+    return std::uint64_t(a) << 32 | b;
+  }
+  VertexId find(std::uint64_t k) const {
+    if (size_ == 0) return kNoVertex;
+    for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
+      if (keys_[i] == k) return values_[i];
+      if (keys_[i] == 0) return kNoVertex;
+    }
+  }
+  // Returns the slot's value, inserting `value` when k is absent.
+  VertexId insert(std::uint64_t k, VertexId value) {
+    if ((size_ + 1) * 2 > keys_.size()) grow();
+    for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
+      if (keys_[i] == k) return values_[i];
+      if (keys_[i] == 0) {
+        keys_[i] = k;
+        values_[i] = value;
+        ++size_;
+        return value;
+      }
+    }
+  }
+  void clear() {
+    keys_.clear();
+    keys_.shrink_to_fit();
+    values_.clear();
+    values_.shrink_to_fit();
+    size_ = 0;
+    mask_ = 0;
+  }
+
+private:
+  std::size_t slot(std::uint64_t k) const {
+    return std::size_t((k * 0x9E3779B97F4A7C15ull) >> 20) & mask_;
+  }
+  void grow() {
+    std::vector<std::uint64_t> keys = std::move(keys_);
+    std::vector<VertexId> values = std::move(values_);
+    std::size_t cap = std::max<std::size_t>(1024, keys.size() * 2);
+    keys_.assign(cap, 0);
+    values_.assign(cap, kNoVertex);
+    mask_ = cap - 1;
+    size_ = 0;
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (keys[i]) insert(keys[i], values[i]);
+  }
+  std::vector<std::uint64_t> keys_;
+  std::vector<VertexId> values_;
+  std::size_t size_ = 0, mask_ = 0;
+};
+
+struct LimitReached {};
+
+template <int Dim> class Refiner {
+  static constexpr int N = Dim + 1;
+
+public:
+  Refiner(Mesh &mesh, const RefineLimits &limits)
+      : m_(mesh), order_(edge_order(mesh)), limits_(limits), nc0_(mesh.num_cells()),
+        nv0_(mesh.num_vertices()) {
+    // The undo log costs memory: keep it only when a limit could trip.
+    logging_ = limits.max_cells != std::numeric_limits<std::size_t>::max() ||
+               nv0_ + 16 * nc0_ >= limits.max_vertices;
+  }
+
+  RefineResult run(std::vector<CellId> work) {
+    RefineResult result;
+    result.selected = work.size();
+    try {
+      std::vector<std::uint8_t> flag;
+      std::vector<CellId> candidates;
+      while (!work.empty()) {
+        const std::size_t cells_before = m_.num_cells(), verts_before = m_.num_vertices();
+        reserve(work.size());
+        for (CellId c : work) bisect(c);
+        result.bisections += work.size();
+        // Candidates for the next pass: the children just made, and every cell
+        // holding both ends of an edge bisected in this pass (ALGORITHMS §6).
+        candidates.assign(work.begin(), work.end());
+        for (std::size_t c = cells_before; c < m_.num_cells(); ++c) candidates.push_back(CellId(c));
+        if (m_.num_vertices() > verts_before) {
+          flag.assign(m_.num_vertices(), 0);
+          for (std::size_t v = verts_before; v < m_.num_vertices(); ++v) {
+            flag[parents_[2 * (v - nv0_)]] = 1;
+            flag[parents_[2 * (v - nv0_) + 1]] = 1;
+          }
+          for (std::size_t c = 0; c < cells_before; ++c) {
+            const VertexId *x = m_.cell(CellId(c));
+            int hits = 0;
+            for (int i = 0; i < N; ++i) hits += flag[x[i]];
+            if (hits >= 2) candidates.push_back(CellId(c));
+          }
+        }
+        std::sort(candidates.begin(), candidates.end());
+        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+        work.clear();
+        for (CellId c : candidates)
+          if (has_hanging_edge(c)) work.push_back(c);
+        if (!work.empty()) ++result.closure_passes;
+      }
+    } catch (const LimitReached &) {
+      undo();
+      result.limit_reached = true;
+      return result;
+    }
+    finish();
+    return result;
+  }
+
+private:
+  bool has_hanging_edge(CellId c) const {
+    const VertexId *x = m_.cell(c);
+    for (const LocalEdge &e : kLocalEdges<Dim>)
+      if (mids_.find(MidpointMap::key(x[e.first], x[e.second])) != kNoVertex) return true;
+    return false;
+  }
+
+  void reserve(std::size_t extra) {
+    std::size_t need = m_.num_cells() + extra;
+    if (need > limits_.max_cells && logging_) throw LimitReached{};
+    if (m_.cells.capacity() < need * N) {
+      std::size_t cap = std::max(need, m_.num_cells() + m_.num_cells() / 4);
+      m_.cells.reserve(cap * N);
+      m_.stage.reserve(cap);
+      m_.tag.reserve(cap);
+    }
+  }
+
+  VertexId midpoint(VertexId a, VertexId b) {
+    std::uint64_t k = MidpointMap::key(a, b);
+    VertexId next = VertexId(m_.num_vertices());
+    VertexId z = mids_.insert(k, next);
+    if (z != next) return z;
+    if (std::size_t(next) + 1 > limits_.max_vertices) {
+      if (logging_) throw LimitReached{};
+      throw CheckError("vertex ids would overflow 32 bits");
+    }
+    const double *p = m_.point(a), *q = m_.point(b);
+    double mid[Dim];
+    for (int k2 = 0; k2 < Dim; ++k2) mid[k2] = 0.5 * (p[k2] + q[k2]);
+    m_.coords.insert(m_.coords.end(), mid, mid + Dim);
+    parents_.push_back(a);
+    parents_.push_back(b);
+    return next;
+  }
+
+  void append(const VertexId *x, Stage s, int t, CellId source) {
+    m_.cells.insert(m_.cells.end(), x, x + N);
+    m_.stage.push_back(s);
+    m_.tag.push_back(std::uint8_t(t));
+    origin_.push_back(source < nc0_ ? source : origin_[source - nc0_]);
+  }
+
+  // Bisects cell c by its refinement edge: child 1 in place, child 2 appended.
+  void bisect(CellId c) {
+    VertexId *slot = m_.cell(c);
+    VertexId x[N];
+    std::copy(slot, slot + N, x);
+    const Stage s = m_.stage[c];
+    const int t = m_.tag[c];
+    if (logging_) {
+      UndoEntry u{c, {}, s, std::uint8_t(t)};
+      std::copy(x, x + N, u.x);
+      log_.push_back(u);
+    }
+    VertexId c1[N], c2[N];
+    if (s == Stage::Maubach) {
+      VertexId z = midpoint(x[0], x[t]);
+      maubach_children<Dim>(x, t, z, c1, c2);
+      const int t2 = maubach_child_tag(t, Dim);
+      std::copy(c1, c1 + N, m_.cell(c));
+      m_.tag[c] = std::uint8_t(t2);
+      append(c2, Stage::Maubach, t2, c);
+      return;
+    }
+    // Stage 1: x = (new vertices (t of them), old sub-simplex).
+    EdgePick e = consistent_edge(order_, x + t, N - t);
+    const int p = t + e.first, q = t + e.second;
+    VertexId z = midpoint(x[p], x[q]);
+    Stage child_stage = Stage::Opposite;
+    int child_tag = t + 1;
+    for (int which = 0; which < 2; ++which) {
+      VertexId *out = which == 0 ? c1 : c2;
+      const int drop = which == 0 ? p : q;
+      VertexId old[N];
+      int n_old = 0;
+      for (int i = t; i < N; ++i)
+        if (i != drop) old[n_old++] = x[i];
+      if (n_old == 3) { // the old part is a triangle: enter Maubach
+        triangle_tuple(order_, old, out);
+        out[3] = z;
+        for (int i = 0; i < t; ++i) out[4 + i] = x[i];
+        child_stage = Stage::Maubach;
+        child_tag = 2;
+      } else {
+        out[0] = z;
+        for (int i = 0; i < t; ++i) out[1 + i] = x[i];
+        std::copy(old, old + n_old, out + 1 + t);
+      }
+    }
+    std::copy(c1, c1 + N, m_.cell(c));
+    m_.stage[c] = child_stage;
+    m_.tag[c] = std::uint8_t(child_tag);
+    append(c2, child_stage, child_tag, c);
+  }
+
+  void undo() {
+    for (auto it = log_.rbegin(); it != log_.rend(); ++it) {
+      std::copy(it->x, it->x + N, m_.cell(it->c));
+      m_.stage[it->c] = it->s;
+      m_.tag[it->c] = it->t;
+    }
+    m_.cells.resize(nc0_ * N);
+    m_.stage.resize(nc0_);
+    m_.tag.resize(nc0_);
+    m_.coords.resize(nv0_ * Dim);
+    m_.cells.shrink_to_fit();
+  }
+
+  // Children inherit cell data; point data is interpolated at midpoints.
+  void finish() {
+    for (DataArray &a : m_.cell_data) {
+      const std::size_t k = a.components;
+      a.values.resize(m_.num_cells() * k);
+      for (std::size_t i = 0; i < origin_.size(); ++i)
+        for (std::size_t j = 0; j < k; ++j)
+          a.values[(nc0_ + i) * k + j] = a.values[std::size_t(origin_[i]) * k + j];
+    }
+    for (DataArray &a : m_.point_data) {
+      const std::size_t k = a.components;
+      a.values.resize(m_.num_vertices() * k);
+      for (std::size_t i = 0; i < parents_.size() / 2; ++i)
+        for (std::size_t j = 0; j < k; ++j)
+          a.values[(nv0_ + i) * k + j] = 0.5 * (a.values[parents_[2 * i] * k + j] +
+                                                a.values[parents_[2 * i + 1] * k + j]);
+    }
+  }
+
+  struct UndoEntry {
+    CellId c;
+    VertexId x[N];
+    Stage s;
+    std::uint8_t t;
+  };
+
+  Mesh &m_;
+  EdgeOrder order_;
+  RefineLimits limits_;
+  std::size_t nc0_, nv0_;
+  bool logging_ = false;
+  MidpointMap mids_;
+  std::vector<CellId> origin_;    // per appended cell: the input cell it descends from
+  std::vector<VertexId> parents_; // per new vertex: the two ends of its edge
+  std::vector<UndoEntry> log_;
+};
+
+template <int Dim>
+RefineResult refine_dim(Mesh &mesh, const std::vector<CellId> &selected, const RefineLimits &limits) {
+  Refiner<Dim> r(mesh, limits);
+  return r.run(selected);
+}
+
+} // namespace
+
+RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected, const RefineLimits &limits) {
+  if (!mesh.marked()) throw CheckError("refine: the mesh is not marked");
+  RefineLimits l = limits;
+  l.max_cells = std::min<std::size_t>(l.max_cells, kNoCell - 1);
+  switch (mesh.dim) {
+  case 2: return refine_dim<2>(mesh, selected, l);
+  case 3: return refine_dim<3>(mesh, selected, l);
+  case 4: return refine_dim<4>(mesh, selected, l);
+  }
+  throw CheckError("refine: unsupported dimension " + std::to_string(mesh.dim));
+}
+
+RefineResult refine_uniform(Mesh &mesh) {
+  std::vector<CellId> all(mesh.num_cells());
+  for (std::size_t c = 0; c < all.size(); ++c) all[c] = CellId(c);
+  return refine(mesh, all);
+}
+
+std::vector<CellId> select_cells(const Mesh &mesh, const Region &region) {
+  const int dim = mesh.dim, nv = dim + 1;
+  double lo[4], hi[4];
+  region.bounds(lo, hi, dim);
+  std::vector<CellId> out;
+  double pts[5 * 4];
+  for (std::size_t c = 0; c < mesh.num_cells(); ++c) {
+    const VertexId *x = mesh.cell(CellId(c));
+    bool outside = false;
+    for (int k = 0; k < dim && !outside; ++k) {
+      double a = mesh.point(x[0])[k], b = a;
+      for (int i = 1; i < nv; ++i) {
+        double v = mesh.point(x[i])[k];
+        a = std::min(a, v);
+        b = std::max(b, v);
+      }
+      outside = b < lo[k] || a > hi[k];
+    }
+    if (outside) continue;
+    for (int i = 0; i < nv; ++i)
+      std::copy(mesh.point(x[i]), mesh.point(x[i]) + dim, pts + i * dim);
+    if (region.touches(pts, dim)) out.push_back(CellId(c));
+  }
+  return out;
+}
+
+} // namespace bisect

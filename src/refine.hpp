@@ -1,0 +1,39 @@
+// Bisection and refine-to-conformity (ALGORITHMS.md §1, §6).
+#pragma once
+
+#include "mesh.hpp"
+#include "region.hpp"
+
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+namespace bisect {
+
+// The cells whose closed simplex touches the region.
+std::vector<CellId> select_cells(const Mesh &mesh, const Region &region);
+
+struct RefineLimits {
+  std::size_t max_cells = std::numeric_limits<std::size_t>::max();
+  // Largest vertex count ids may reach (kNoVertex is reserved); lowered in tests.
+  std::size_t max_vertices = std::numeric_limits<VertexId>::max() - 1;
+};
+
+struct RefineResult {
+  std::size_t selected = 0;       // cells bisected because they were selected
+  std::size_t bisections = 0;     // all bisections, closure included
+  std::size_t closure_passes = 0; // passes after the first
+  bool limit_reached = false;     // the iteration was undone: it would pass a limit
+};
+
+// Bisects every cell of `selected` (ids of a marked mesh, no duplicates), then
+// refines to conformity: cells with an edge whose midpoint exists are bisected
+// by their own refinement edge until none is left. Children inherit cell data;
+// point data is interpolated linearly at midpoints. When the result would pass
+// a limit the mesh is left exactly as it was and `limit_reached` is set.
+RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected, const RefineLimits &limits = {});
+
+// Bisects every cell once, then refines to conformity.
+RefineResult refine_uniform(Mesh &mesh);
+
+} // namespace bisect

@@ -1,0 +1,30 @@
+// Regions that select the cells to bisect, read from a JSON spec.
+//
+// A region answers one question: does a closed simplex touch it? Answers are
+// exact or conservative (never "no" for a simplex the region touches); each
+// region type documents which in region.cpp.
+#pragma once
+
+#include <memory>
+#include <string>
+
+namespace bisect {
+
+class Region {
+public:
+  virtual ~Region() = default;
+  // `verts` holds dim+1 points of `dim` coordinates each (row after row).
+  virtual bool touches(const double *verts, int dim) const = 0;
+  // Every point the region contains lies in [lo, hi] (per coordinate);
+  // unbounded coordinates give +-infinity. Used to skip far cells quickly.
+  virtual void bounds(double *lo, double *hi, int dim) const = 0;
+};
+
+// Parses a region spec for a mesh of dimension `dim`. `origin` names where the
+// text came from (a file path) for error messages. Throws InputError.
+std::unique_ptr<Region> parse_region(const std::string &json_text, int dim,
+                                     const std::string &origin);
+// Reads and parses a spec file.
+std::unique_ptr<Region> read_region(const std::string &path, int dim);
+
+} // namespace bisect

@@ -1,0 +1,68 @@
+// Helpers shared by the tests.
+#pragma once
+
+#include "check.hpp"
+#include "mesh.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace bisect::testing {
+
+inline std::string data_path(const std::string &name) { return std::string(BISECT_DATA_DIR) + "/" + name; }
+
+// Renumbers vertices by a random permutation (cells keep their shape).
+inline Mesh renumbered(const Mesh &in, std::uint64_t seed) {
+  Mesh m = in;
+  const std::size_t nv = in.num_vertices();
+  std::vector<VertexId> perm(nv);
+  std::iota(perm.begin(), perm.end(), 0);
+  std::mt19937_64 rng(seed);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  for (std::size_t v = 0; v < nv; ++v)
+    std::copy(in.point(VertexId(v)), in.point(VertexId(v)) + in.dim, m.coords.begin() + perm[v] * in.dim);
+  for (VertexId &x : m.cells) x = perm[x];
+  for (DataArray &a : m.point_data)
+    for (std::size_t v = 0; v < nv; ++v)
+      for (int k = 0; k < a.components; ++k)
+        a.values[perm[v] * a.components + k] = in.point_data[&a - m.point_data.data()].values[v * a.components + k];
+  return m;
+}
+
+// Moves every vertex by up to `amount` in each coordinate, except vertices
+// on the bounding box (so the domain and its volume stay the same).
+inline Mesh perturbed_inside_box(const Mesh &in, double amount, std::uint64_t seed) {
+  Mesh m = in;
+  const int d = in.dim;
+  std::vector<double> lo(d, 1e300), hi(d, -1e300);
+  for (std::size_t v = 0; v < in.num_vertices(); ++v)
+    for (int k = 0; k < d; ++k) {
+      lo[k] = std::min(lo[k], in.point(VertexId(v))[k]);
+      hi[k] = std::max(hi[k], in.point(VertexId(v))[k]);
+    }
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-amount, amount);
+  for (std::size_t v = 0; v < in.num_vertices(); ++v) {
+    bool on_box = false;
+    for (int k = 0; k < d; ++k)
+      on_box |= in.point(VertexId(v))[k] == lo[k] || in.point(VertexId(v))[k] == hi[k];
+    if (on_box) continue;
+    for (int k = 0; k < d; ++k) m.coords[v * d + k] += u(rng);
+  }
+  return m;
+}
+
+} // namespace bisect::testing
+
+// Asserts the mesh passes every conformity check against `inv`, printing the
+// first failure.
+#define REQUIRE_CONFORMING(mesh, inv)                                                              \
+  do {                                                                                             \
+    const ::bisect::CheckResult check_result_ = ::bisect::check_conformity((mesh), &(inv));       \
+    INFO(check_result_.failure);                                                                   \
+    REQUIRE(check_result_.ok);                                                                     \
+  } while (0)

@@ -1,0 +1,257 @@
+// Refine to conformity (ALGORITHMS.md §6) and the papers' properties.
+#include "generate.hpp"
+#include "io.hpp"
+#include "mark.hpp"
+#include "measure.hpp"
+#include "refine.hpp"
+#include "region.hpp"
+#include "support.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+using namespace bisect;
+
+namespace {
+
+Mesh load(const std::string &name) {
+  Mesh m = read_mesh(testing::data_path(name));
+  prepare_input(m, name);
+  return m;
+}
+
+// Refines `iterations` times around the region and checks every iteration.
+void refine_and_check(Mesh m, Marking marking, const std::string &region_json, int iterations) {
+  mark_mesh(m, marking);
+  Invariants inv = measure_invariants(m);
+  auto region = parse_region(region_json, m.dim, "test");
+  std::size_t cells = m.num_cells();
+  for (int it = 1; it <= iterations; ++it) {
+    auto sel = select_cells(m, *region);
+    RefineResult r = refine(m, sel);
+    INFO("iteration " << it << ", marking " << marking_name(marking));
+    REQUIRE(!r.limit_reached);
+    REQUIRE(m.num_cells() >= cells + sel.size());
+    cells = m.num_cells();
+    REQUIRE_CONFORMING(m, inv);
+  }
+  // Closure: a pass over an empty selection changes nothing.
+  std::size_t before = m.num_cells();
+  refine(m, {});
+  REQUIRE(m.num_cells() == before);
+}
+
+const Marking kMarkings[] = {Marking::Index, Marking::Longest, Marking::Sorted};
+
+} // namespace
+
+TEST_CASE("closure: the bundled 2D mesh stays conforming over 10 local iterations", "[refine][2d]") {
+  Mesh m = load("square.msh");
+  for (Marking mk : kMarkings)
+    refine_and_check(m, mk, R"({"type":"sphere","center":[0.5,0.5],"radius":0.3})", 10);
+}
+
+TEST_CASE("closure: the bundled ball stays conforming over 10 iterations around the hemisphere",
+          "[refine][3d]") {
+  Mesh m = load("ball.msh");
+  for (Marking mk : kMarkings)
+    refine_and_check(m, mk,
+                     R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,"normal":[1,0,0],"offset":0.5})",
+                     10);
+}
+
+TEST_CASE("closure: perturbed and renumbered meshes stay conforming", "[refine][2d][3d]") {
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    for (int dim : {2, 3}) {
+      Mesh m = testing::renumbered(testing::perturbed_inside_box(generate_kuhn(dim, 4), 0.06, seed), seed);
+      prepare_input(m, "perturbed");
+      std::string region = dim == 2 ? R"({"type":"sphere","center":[0.3,0.4],"radius":0.35})"
+                                    : R"({"type":"sphere","center":[0.3,0.4,0.5],"radius":0.35})";
+      for (Marking mk : kMarkings) refine_and_check(m, mk, region, 8);
+    }
+    Mesh ball = testing::renumbered(load("ball.msh"), seed);
+    refine_and_check(ball, seed % 2 ? Marking::Longest : Marking::Index,
+                     R"({"type":"sphere","center":[0.2,-0.3,0.1],"radius":1.2})", 6);
+  }
+}
+
+TEST_CASE("closure: a box region touching the boundary keeps boundary measure", "[refine][3d]") {
+  Mesh m = load("ball.msh");
+  refine_and_check(m, Marking::Longest, R"({"type":"box","min":[1.5,-2,-2],"max":[3,2,2]})", 6);
+}
+
+TEST_CASE("refinement is deterministic: two runs through a saved file equal one run", "[refine][io]") {
+  const std::string region_json =
+      R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,"normal":[1,0,0],"offset":0.5})";
+  for (Marking mk : {Marking::Index, Marking::Longest}) {
+    for (const char *ext : {".vtu", ".msh"}) {
+      Mesh one = load("ball.msh");
+      mark_mesh(one, mk);
+      auto region = parse_region(region_json, 3, "test");
+      for (int it = 0; it < 5; ++it) refine(one, select_cells(one, *region));
+
+      Mesh two = load("ball.msh");
+      mark_mesh(two, mk);
+      for (int it = 0; it < 3; ++it) refine(two, select_cells(two, *region));
+      std::string path = (std::filesystem::temp_directory_path() / (std::string("bisect-two-runs") + ext)).string();
+      encode_state(two);
+      write_mesh(path, two);
+      Mesh back = read_mesh(path);
+      prepare_input(back, path);
+      REQUIRE(decode_state(back, path));
+      REQUIRE(back.marking == mk);
+      for (int it = 0; it < 2; ++it) refine(back, select_cells(back, *region));
+      std::filesystem::remove(path);
+
+      REQUIRE(back.num_cells() == one.num_cells());
+      REQUIRE(back.coords == one.coords);
+      REQUIRE(back.cells == one.cells);
+      REQUIRE(back.tag == one.tag);
+    }
+  }
+}
+
+TEST_CASE("cell data is inherited and point data interpolated at midpoints", "[refine][3d]") {
+  Mesh m = generate_kuhn(3, 2);
+  DataArray cd{"material", 1, {}}, pd{"f", 1, {}};
+  for (std::size_t c = 0; c < m.num_cells(); ++c) cd.values.push_back(double(c % 3));
+  for (std::size_t v = 0; v < m.num_vertices(); ++v) {
+    const double *p = m.point(VertexId(v));
+    pd.values.push_back(2 * p[0] - p[1] + 3 * p[2]); // linear: interpolation is exact
+  }
+  m.cell_data.push_back(cd);
+  m.point_data.push_back(pd);
+  // The cell's material is a function of its centroid's original cell:
+  // record which original cell each point is inside, via the centroid.
+  mark_mesh(m, Marking::Index);
+  Mesh original = m;
+  auto region = parse_region(R"({"type":"sphere","center":[0.5,0.5,0.5],"radius":0.4})", 3, "t");
+  for (int it = 0; it < 4; ++it) refine(m, select_cells(m, *region));
+  for (std::size_t v = 0; v < m.num_vertices(); ++v) {
+    const double *p = m.point(VertexId(v));
+    REQUIRE(m.point_data[0].values[v] == Approx(2 * p[0] - p[1] + 3 * p[2]).margin(1e-12));
+  }
+  REQUIRE(m.cell_data[0].values.size() == m.num_cells());
+  // Every child's material equals the material of the original cell holding its centroid.
+  double pts[4 * 3], opts[4 * 3];
+  for (std::size_t c = 0; c < m.num_cells(); ++c) {
+    cell_points(m, CellId(c), pts);
+    double g[3] = {0, 0, 0};
+    for (int i = 0; i < 4; ++i)
+      for (int k = 0; k < 3; ++k) g[k] += pts[i * 3 + k] / 4;
+    bool found = false;
+    for (std::size_t o = 0; o < original.num_cells() && !found; ++o) {
+      cell_points(original, CellId(o), opts);
+      // inside test: the four sub-volumes with g have the signs of the cell
+      double vol = signed_volume(opts, 3), sum = 0;
+      bool inside = true;
+      for (int i = 0; i < 4; ++i) {
+        double q[12];
+        std::copy(opts, opts + 12, q);
+        std::copy(g, g + 3, q + 3 * i);
+        double s = signed_volume(q, 3) / vol;
+        inside &= s > 1e-12;
+        sum += s;
+      }
+      if (inside) {
+        found = true;
+        REQUIRE(m.cell_data[0].values[c] == original.cell_data[0].values[o]);
+      }
+    }
+    REQUIRE(found);
+  }
+}
+
+TEST_CASE("max cells: an iteration that would pass the limit is undone exactly", "[refine][3d]") {
+  Mesh m = load("ball.msh");
+  mark_mesh(m, Marking::Index);
+  auto region = parse_region(R"({"type":"sphere","center":[0,0,0],"radius":1})", 3, "t");
+  refine(m, select_cells(m, *region));
+  Mesh before = m;
+  RefineLimits limits;
+  limits.max_cells = m.num_cells() + 10;
+  RefineResult r = refine(m, select_cells(m, *region), limits);
+  REQUIRE(r.limit_reached);
+  REQUIRE(m.cells == before.cells);
+  REQUIRE(m.coords == before.coords);
+  REQUIRE(m.tag == before.tag);
+  REQUIRE(m.stage == before.stage);
+  Invariants inv = measure_invariants(before);
+  REQUIRE_CONFORMING(m, inv);
+}
+
+TEST_CASE("32-bit ids: running out of vertex ids stops cleanly", "[refine][2d]") {
+  Mesh m = generate_kuhn(2, 4);
+  mark_mesh(m, Marking::Index);
+  Mesh before = m;
+  RefineLimits limits;
+  limits.max_vertices = m.num_vertices() + 5;
+  RefineResult r = refine_uniform(m), r2{};
+  (void)r;
+  m = before;
+  std::vector<CellId> all(m.num_cells());
+  for (std::size_t c = 0; c < all.size(); ++c) all[c] = CellId(c);
+  r2 = refine(m, all, limits);
+  REQUIRE(r2.limit_reached);
+  REQUIRE(m.cells == before.cells);
+}
+
+// ---- seed 002 §5.1: uniform refinement of one tet ----
+
+namespace {
+
+struct UniformRun {
+  std::vector<double> qmin;  // per iteration 0..k
+  std::size_t classes = 0;    // over every generated cell
+};
+
+UniformRun uniform(Mesh m, Marking marking, int iterations) {
+  mark_mesh(m, marking);
+  UniformRun run;
+  run.qmin.push_back(quality_summary(m).min);
+  Mesh all_generated = m; // accumulates every generation's cells for the class count
+  for (int it = 1; it <= iterations; ++it) {
+    refine_uniform(m);
+    run.qmin.push_back(quality_summary(m).min);
+    if (it <= 12) {
+      all_generated.coords = m.coords;
+      all_generated.cells.insert(all_generated.cells.end(), m.cells.begin(), m.cells.end());
+    }
+  }
+  all_generated.stage.clear();
+  run.classes = count_similarity_classes(all_generated);
+  return run;
+}
+
+} // namespace
+
+TEST_CASE("uniform tet: at most 36 classes with index, 72 with longest; min quality period 3",
+          "[refine][3d][quality]") {
+  for (SimplexShape shape : {SimplexShape::Equilateral, SimplexShape::Cartesian, SimplexShape::Random}) {
+    for (std::uint64_t seed : {1, 2, 3}) {
+      if (shape != SimplexShape::Random && seed > 1) continue;
+      Mesh tet = generate_simplex(3, shape, seed);
+      for (Marking mk : {Marking::Index, Marking::Longest, Marking::Sorted}) {
+        UniformRun run = uniform(tet, mk, 12);
+        INFO("shape " << int(shape) << " seed " << seed << " marking " << marking_name(mk)
+                      << " classes " << run.classes);
+        REQUIRE(run.classes <= (mk == Marking::Longest ? 72u : 36u));
+        for (int k = 6; k + 3 <= 12; ++k) REQUIRE(run.qmin[k] == Approx(run.qmin[k + 3]).epsilon(1e-9));
+        // The quality never drops below its cycle's minimum.
+        double floor = *std::min_element(run.qmin.begin() + 6, run.qmin.end());
+        for (double q : run.qmin) REQUIRE(q >= floor * (1 - 1e-9));
+      }
+    }
+  }
+}
+
+TEST_CASE("uniform triangle: newest vertex bisection has at most 4 classes, period 2", "[refine][2d][quality]") {
+  for (SimplexShape shape : {SimplexShape::Equilateral, SimplexShape::Random}) {
+    Mesh tri = generate_simplex(2, shape, 4);
+    UniformRun run = uniform(tri, Marking::Index, 10);
+    INFO("classes " << run.classes);
+    REQUIRE(run.classes <= 4u);
+    for (int k = 2; k + 2 <= 10; ++k) REQUIRE(run.qmin[k] == Approx(run.qmin[k + 2]).epsilon(1e-9));
+  }
+}

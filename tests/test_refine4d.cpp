@@ -1,0 +1,89 @@
+// 4D: Stage 1 then Maubach (ALGORITHMS.md §4, seed 000).
+#include "generate.hpp"
+#include "mark.hpp"
+#include "measure.hpp"
+#include "refine.hpp"
+#include "region.hpp"
+#include "support.hpp"
+
+#include <catch2/catch.hpp>
+
+using namespace bisect;
+
+namespace {
+
+// Two pentatopes {0,1,2,3,4} and {1,2,3,4,5} sharing the tetrahedron {1,2,3,4}.
+Mesh two_pentatopes() {
+  Mesh m;
+  m.dim = 4;
+  m.coords = {0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0.9, 0.8, 0.7, 0.6};
+  // vertex 0 is the origin; 5 lies beyond the facet {1,2,3,4}
+  m.cells = {0, 1, 2, 3, 4, 1, 2, 3, 4, 5};
+  prepare_input(m, "two");
+  return m;
+}
+
+} // namespace
+
+TEST_CASE("4D: skipping Stage 1 with the index order is not conformal; Stage 1 is", "[refine][4d]") {
+  Mesh with_stage1 = two_pentatopes();
+  mark_mesh(with_stage1, Marking::Index);
+  Invariants inv = measure_invariants(with_stage1);
+  for (int it = 0; it < 3; ++it) refine_uniform(with_stage1);
+  REQUIRE_CONFORMING(with_stage1, inv);
+
+  // Without Stage 1 every pentatope is (a, c, b, e, d)_2 for sorted ids a<b<c<d<e.
+  Mesh skipped = two_pentatopes();
+  mark_mesh(skipped, Marking::Index);
+  for (std::size_t c = 0; c < skipped.num_cells(); ++c) {
+    VertexId *x = skipped.cell(CellId(c));
+    std::sort(x, x + 5);
+    VertexId a = x[0], b = x[1], cc = x[2], d = x[3], e = x[4];
+    x[0] = a, x[1] = cc, x[2] = b, x[3] = e, x[4] = d;
+    skipped.stage[c] = Stage::Maubach;
+    skipped.tag[c] = 2;
+  }
+  for (int it = 0; it < 3; ++it) refine_uniform(skipped);
+  CheckResult r = check_conformity(skipped, &inv);
+  INFO(r.failure);
+  REQUIRE_FALSE(r.ok);
+}
+
+TEST_CASE("4D: local refinement of renumbered Kuhn hypercubes stays conforming", "[refine][4d]") {
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    for (Marking mk : {Marking::Index, Marking::Longest, Marking::Sorted}) {
+      Mesh m = testing::renumbered(generate_kuhn(4, 2), seed);
+      mark_mesh(m, mk);
+      Invariants inv = measure_invariants(m);
+      auto region = parse_region(
+          R"({"type":"sphere","center":[0.3,0.4,0.5,0.45],"radius":0.4})", 4, "t");
+      for (int it = 1; it <= 6; ++it) {
+        refine(m, select_cells(m, *region));
+        INFO("seed " << seed << " marking " << marking_name(mk) << " iteration " << it);
+        REQUIRE_CONFORMING(m, inv);
+      }
+    }
+  }
+}
+
+TEST_CASE("4D: Stage 1 leaves every grandchild a Maubach tuple with tag 2", "[refine][4d]") {
+  Mesh m = generate_simplex(4, SimplexShape::Random, 9);
+  mark_mesh(m, Marking::Longest);
+  REQUIRE(m.stage[0] == Stage::Opposite);
+  refine_uniform(m);
+  for (std::size_t c = 0; c < m.num_cells(); ++c) {
+    REQUIRE(m.stage[c] == Stage::Opposite);
+    REQUIRE(m.tag[c] == 1);
+  }
+  refine_uniform(m);
+  REQUIRE(m.num_cells() == 4);
+  for (std::size_t c = 0; c < m.num_cells(); ++c) {
+    REQUIRE(m.stage[c] == Stage::Maubach);
+    REQUIRE(m.tag[c] == 2);
+    // (alpha, gamma, beta, u, v): u, v are the two new vertices, u the newer.
+    const VertexId *x = m.cell(CellId(c));
+    REQUIRE(x[3] >= 5);
+    REQUIRE(x[4] == 5);
+    REQUIRE(x[3] > x[4]);
+  }
+}
