@@ -1,0 +1,606 @@
+// Conformity checks and input validation (ALGORITHMS.md §7).
+//
+// Everything topological runs on sub-simplices identified by their sorted
+// vertex ids. Uniqueness is found without maps: references (cell, local
+// sub-simplex) are bucketed by their smallest vertex id with a counting sort,
+// then each small bucket is sorted by the remaining ids. Memory is one 32-bit
+// reference per (cell, sub-simplex) plus one offset per vertex.
+//
+// Geometric tests use the same kernels as measure.cpp; the hanging-node test
+// hashes boundary vertices into a uniform grid and tests every boundary facet
+// against the vertices in its bounding box.
+#include "check.hpp"
+
+#include "measure.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace bisect {
+namespace {
+
+// ---- local numbering of sub-simplices ---------------------------------------
+
+constexpr int binomial(int n, int k) {
+  int r = 1;
+  for (int i = 1; i <= k; ++i) r = r * (n - k + i) / i;
+  return r;
+}
+
+// All K-subsets of {0..N-1} in lexicographic order. For K = N-1 (facets of a
+// cell with N vertices) subset m omits local vertex N-1-m.
+template <int N, int K> constexpr std::array<std::array<int, K>, binomial(N, K)> combinations() {
+  std::array<std::array<int, K>, binomial(N, K)> out{};
+  std::array<int, K> c{};
+  for (int i = 0; i < K; ++i) c[i] = i;
+  for (int m = 0; m < binomial(N, K); ++m) {
+    out[m] = c;
+    int i = K - 1;
+    while (i >= 0 && c[i] == N - K + i) --i;
+    if (i < 0) break;
+    ++c[i];
+    for (int j = i + 1; j < K; ++j) c[j] = c[j - 1] + 1;
+  }
+  return out;
+}
+
+template <int Dim> constexpr int opposite_of_facet(int m) { return Dim - m; }
+
+template <int K> void sort_small(std::array<VertexId, K> &a) {
+  for (int i = 1; i < K; ++i)
+    for (int j = i; j > 0 && a[j] < a[j - 1]; --j) std::swap(a[j], a[j - 1]);
+}
+
+// Calls visit(key, refs, count) once per distinct K-vertex sub-simplex of the
+// cells, with `key` its sorted vertex ids and refs[0..count) the references
+// cell * M + m (M sub-simplices per cell, m in lexicographic subset order).
+// Sub-simplices come in increasing key order.
+template <int Dim, int K, class Visit> void for_each_subsimplex(const Mesh &mesh, Visit &&visit) {
+  static constexpr auto subsets = combinations<Dim + 1, K>();
+  constexpr int M = int(subsets.size());
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  if (nc * M >= std::size_t(UINT32_MAX))
+    throw std::length_error("mesh too large for 32-bit sub-simplex references");
+  auto key_of = [&](std::size_t c, int m) {
+    const VertexId *cell = mesh.cell(CellId(c));
+    std::array<VertexId, K> key;
+    for (int i = 0; i < K; ++i) key[i] = cell[subsets[m][i]];
+    sort_small<K>(key);
+    return key;
+  };
+  auto min_of = [&](std::size_t c, int m) {
+    const VertexId *cell = mesh.cell(CellId(c));
+    VertexId v = cell[subsets[m][0]];
+    for (int i = 1; i < K; ++i) v = std::min(v, cell[subsets[m][i]]);
+    return v;
+  };
+  // Counting sort by smallest id: after filling, bucket v is [start[v], start[v+1]).
+  std::vector<std::uint32_t> start(nv + 2, 0);
+  for (std::size_t c = 0; c < nc; ++c)
+    for (int m = 0; m < M; ++m) ++start[min_of(c, m) + 2];
+  for (std::size_t v = 2; v < nv + 2; ++v) start[v] += start[v - 1];
+  std::vector<std::uint32_t> refs(nc * M);
+  for (std::size_t c = 0; c < nc; ++c)
+    for (int m = 0; m < M; ++m) refs[start[min_of(c, m) + 1]++] = std::uint32_t(c * M + m);
+
+  struct Entry {
+    std::array<VertexId, K> key;
+    std::uint32_t ref;
+    bool operator<(const Entry &o) const { return key != o.key ? key < o.key : ref < o.ref; }
+  };
+  std::vector<Entry> bucket;
+  std::vector<std::uint32_t> group;
+  for (std::size_t v = 0; v < nv; ++v) {
+    bucket.clear();
+    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i)
+      bucket.push_back({key_of(refs[i] / M, int(refs[i] % M)), refs[i]});
+    std::sort(bucket.begin(), bucket.end());
+    for (std::size_t i = 0; i < bucket.size();) {
+      std::size_t j = i;
+      group.clear();
+      while (j < bucket.size() && bucket[j].key == bucket[i].key) group.push_back(bucket[j++].ref);
+      visit(bucket[i].key, group.data(), int(group.size()));
+      i = j;
+    }
+  }
+}
+
+template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
+  std::size_t n = 0;
+  for_each_subsimplex<Dim, K>(mesh, [&](const auto &, const std::uint32_t *, int) { ++n; });
+  return n;
+}
+
+// ---- small geometry ---------------------------------------------------------
+
+template <int Dim> double squared_distance(const double *p, const double *q) {
+  double s = 0;
+  for (int i = 0; i < Dim; ++i) s += (p[i] - q[i]) * (p[i] - q[i]);
+  return s;
+}
+
+// Determinant of an n x n row-major matrix (n <= 4), destroys `a`.
+double small_determinant(double *a, int n) {
+  double det = 1;
+  for (int k = 0; k < n; ++k) {
+    int p = k;
+    for (int i = k + 1; i < n; ++i)
+      if (std::abs(a[i * n + k]) > std::abs(a[p * n + k])) p = i;
+    if (a[p * n + k] == 0) return 0;
+    if (p != k) {
+      for (int j = 0; j < n; ++j) std::swap(a[k * n + j], a[p * n + j]);
+      det = -det;
+    }
+    det *= a[k * n + k];
+    for (int i = k + 1; i < n; ++i) {
+      const double f = a[i * n + k] / a[k * n + k];
+      for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
+    }
+  }
+  return det;
+}
+
+// Solves the n x n system G x = b (n <= 3) by elimination with pivoting;
+// false when G is singular.
+bool small_solve(double *g, double *b, int n, double *x) {
+  for (int k = 0; k < n; ++k) {
+    int p = k;
+    for (int i = k + 1; i < n; ++i)
+      if (std::abs(g[i * n + k]) > std::abs(g[p * n + k])) p = i;
+    if (!(std::abs(g[p * n + k]) > 0)) return false;
+    if (p != k) {
+      for (int j = 0; j < n; ++j) std::swap(g[k * n + j], g[p * n + j]);
+      std::swap(b[k], b[p]);
+    }
+    for (int i = k + 1; i < n; ++i) {
+      const double f = g[i * n + k] / g[k * n + k];
+      for (int j = k; j < n; ++j) g[i * n + j] -= f * g[k * n + j];
+      b[i] -= f * b[k];
+    }
+  }
+  for (int k = n - 1; k >= 0; --k) {
+    double s = b[k];
+    for (int j = k + 1; j < n; ++j) s -= g[k * n + j] * x[j];
+    x[k] = s / g[k * n + k];
+  }
+  return true;
+}
+
+// (Dim-1)-measure of the facet with vertex rows p[0..Dim): sqrt(det Gram)/(Dim-1)!.
+template <int Dim> double facet_measure(const double *p) {
+  constexpr int n = Dim - 1;
+  double e[n][Dim];
+  for (int i = 0; i < n; ++i)
+    for (int d = 0; d < Dim; ++d) e[i][d] = p[(i + 1) * Dim + d] - p[d];
+  double g[n * n];
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      double s = 0;
+      for (int d = 0; d < Dim; ++d) s += e[i][d] * e[j][d];
+      g[i * n + j] = s;
+    }
+  double fact = 1;
+  for (int i = 2; i <= n; ++i) fact *= i;
+  return std::sqrt(std::max(0.0, small_determinant(g, n))) / fact;
+}
+
+template <int Dim> double longest_squared_edge(const double *p) {
+  double l = 0;
+  for (int i = 0; i <= Dim; ++i)
+    for (int j = i + 1; j <= Dim; ++j) l = std::max(l, squared_distance<Dim>(p + i * Dim, p + j * Dim));
+  return l;
+}
+
+// Degenerate: |vol| <= 1e-14 * (longest edge)^n.
+template <int Dim> bool degenerate(const double *p, double volume) {
+  const double l = std::sqrt(longest_squared_edge<Dim>(p));
+  return !(std::abs(volume) > 1e-14 * std::pow(l, Dim));
+}
+
+// Tolerance for "x lies on a facet", relative to the facet's longest edge and
+// in barycentric coordinates.
+constexpr double kOnFacetTol = 1e-8;
+
+// Whether point x lies in the closed facet p[0..Dim) (rows): its distance to
+// the facet's affine hull is tiny and its barycentric coordinates are >= 0.
+template <int Dim> bool on_facet(const double *p, const double *x) {
+  constexpr int n = Dim - 1;
+  double e[n][Dim], d[Dim];
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < Dim; ++k) e[i][k] = p[(i + 1) * Dim + k] - p[k];
+  for (int k = 0; k < Dim; ++k) d[k] = x[k] - p[k];
+  double g[n * n], b[n], lambda[n];
+  double size2 = 0;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      double s = 0;
+      for (int k = 0; k < Dim; ++k) s += e[i][k] * e[j][k];
+      g[i * n + j] = s;
+    }
+    double s = 0;
+    for (int k = 0; k < Dim; ++k) s += e[i][k] * d[k];
+    b[i] = s;
+  }
+  for (int i = 0; i < Dim; ++i)
+    for (int j = i + 1; j < Dim; ++j) size2 = std::max(size2, squared_distance<Dim>(p + i * Dim, p + j * Dim));
+  if (!small_solve(g, b, n, lambda)) return false;
+  double rest = 1, r2 = 0;
+  for (int i = 0; i < n; ++i) {
+    if (lambda[i] < -kOnFacetTol) return false;
+    rest -= lambda[i];
+  }
+  if (rest < -kOnFacetTol) return false;
+  for (int k = 0; k < Dim; ++k) {
+    double r = d[k];
+    for (int i = 0; i < n; ++i) r -= lambda[i] * e[i][k];
+    r2 += r * r;
+  }
+  return r2 <= kOnFacetTol * kOnFacetTol * size2;
+}
+
+template <int Dim> void gather(const Mesh &mesh, const VertexId *ids, int count, double *out) {
+  for (int k = 0; k < count; ++k) {
+    const double *q = mesh.point(ids[k]);
+    for (int d = 0; d < Dim; ++d) out[k * Dim + d] = q[d];
+  }
+}
+
+// ---- messages ---------------------------------------------------------------
+
+template <std::size_t K> std::string id_list(const std::array<VertexId, K> &key) {
+  std::string s = "(";
+  for (std::size_t i = 0; i < K; ++i) s += (i ? ", " : "") + std::to_string(key[i]);
+  return s + ")";
+}
+
+std::string id_list(const VertexId *ids, int count) {
+  std::string s = "(";
+  for (int i = 0; i < count; ++i) s += (i ? ", " : "") + std::to_string(ids[i]);
+  return s + ")";
+}
+
+std::string format(const char *fmt, double a, double b, double c) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c);
+  return buf;
+}
+
+// ---- the passes -------------------------------------------------------------
+
+// What one walk over the facets finds.
+struct FacetReport {
+  std::size_t facets = 0;          // distinct facets
+  std::size_t boundary_facets = 0; // owned by one cell
+  double boundary_measure = 0;
+  std::vector<VertexId> boundary;  // Dim sorted ids per boundary facet
+  std::string nonmanifold;         // first facet shared by 3+ cells, e.g. "facet (1, 2, 3) is shared by 3 cells"
+  std::string overlap;             // first folded pair, e.g. "cells 5 and 9 overlap across facet (1, 2, 3)"
+};
+
+// Across an interior facet the two opposite vertices must lie on opposite
+// sides of the facet's hyperplane: the orientation determinants (facet
+// vertices in key order, then the opposite vertex) have opposite signs.
+template <int Dim> FacetReport facet_pass(const Mesh &mesh, bool keep_boundary) {
+  constexpr int M = Dim + 1;
+  FacetReport r;
+  double pts[(Dim + 1) * Dim];
+  for_each_subsimplex<Dim, Dim>(mesh, [&](const std::array<VertexId, Dim> &key,
+                                          const std::uint32_t *refs, int count) {
+    ++r.facets;
+    gather<Dim>(mesh, key.data(), Dim, pts);
+    if (count == 1) {
+      ++r.boundary_facets;
+      r.boundary_measure += facet_measure<Dim>(pts);
+      if (keep_boundary) r.boundary.insert(r.boundary.end(), key.begin(), key.end());
+    } else if (count == 2) {
+      if (!r.overlap.empty()) return;
+      double side[2];
+      CellId cells[2];
+      for (int s = 0; s < 2; ++s) {
+        cells[s] = CellId(refs[s] / M);
+        const VertexId o = mesh.cell(cells[s])[opposite_of_facet<Dim>(int(refs[s] % M))];
+        gather<Dim>(mesh, &o, 1, pts + Dim * Dim);
+        side[s] = signed_volume(pts, Dim);
+      }
+      if ((side[0] > 0 && side[1] > 0) || (side[0] < 0 && side[1] < 0))
+        r.overlap = "cells " + std::to_string(cells[0]) + " and " + std::to_string(cells[1]) +
+                    " overlap across facet " + id_list(key);
+    } else if (r.nonmanifold.empty()) {
+      r.nonmanifold = "facet " + id_list(key) + " is shared by " + std::to_string(count) + " cells";
+    }
+  });
+  return r;
+}
+
+// First cell with an id out of range, e.g. "cell 5 refers to vertex 99, but
+// there are only 12 vertices"; empty when all ids are valid.
+std::string check_ids(const Mesh &mesh) {
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  const int n = mesh.cell_size();
+  for (std::size_t c = 0; c < nc; ++c)
+    for (int k = 0; k < n; ++k)
+      if (mesh.cells[c * n + k] >= nv)
+        return "cell " + std::to_string(c) + " refers to vertex " + std::to_string(mesh.cells[c * n + k]) +
+               ", but there are only " + std::to_string(nv) + " vertices";
+  return {};
+}
+
+std::string check_shape(const Mesh &mesh) {
+  if (mesh.dim < 2 || mesh.dim > 4)
+    return "unsupported dimension " + std::to_string(mesh.dim) + " (expected 2, 3 or 4)";
+  if (mesh.coords.size() % mesh.dim != 0)
+    return "coordinate array length " + std::to_string(mesh.coords.size()) +
+           " is not a multiple of the dimension " + std::to_string(mesh.dim);
+  if (mesh.cells.size() % (mesh.dim + 1) != 0)
+    return "cell array length " + std::to_string(mesh.cells.size()) + " is not a multiple of " +
+           std::to_string(mesh.dim + 1);
+  return {};
+}
+
+// Sum of |volume|; `first_degenerate` set to the first degenerate cell.
+template <int Dim> double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_volume) {
+  const std::size_t nc = mesh.num_cells();
+  double pts[(Dim + 1) * Dim];
+  double total = 0;
+  first_degenerate = std::size_t(-1);
+  for (std::size_t c = 0; c < nc; ++c) {
+    gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
+    const double v = signed_volume(pts, Dim);
+    total += std::abs(v);
+    if (first_degenerate == std::size_t(-1) && degenerate<Dim>(pts, v)) {
+      first_degenerate = c;
+      its_volume = v;
+    }
+  }
+  return total;
+}
+
+// V - E + F - ... over the vertices used by cells; `facets` is the number of
+// distinct facets (already known from facet_pass).
+template <int Dim> long long euler_characteristic(const Mesh &mesh, std::size_t facets) {
+  std::vector<char> used(mesh.num_vertices(), 0);
+  for (VertexId v : mesh.cells) used[v] = 1;
+  long long chi = std::count(used.begin(), used.end(), 1);
+  long long sign = -1;
+  auto add = [&](long long count) {
+    chi += sign * count;
+    sign = -sign;
+  };
+  if constexpr (Dim >= 3) add((long long)count_subsimplices<Dim, 2>(mesh));
+  if constexpr (Dim >= 4) add((long long)count_subsimplices<Dim, 3>(mesh));
+  add((long long)facets);
+  add((long long)mesh.num_cells());
+  return chi;
+}
+
+// Hanging nodes: a vertex lying on the closed boundary facet it does not
+// belong to. In a conforming mesh the only vertices on a closed facet are its
+// own (cells meet in common faces); a non-conforming interface shows up as
+// boundary facets on both sides, so only boundary facets and boundary
+// vertices need to be searched. Boundary vertices go into a uniform grid
+// (cell size = mean facet extent) stored as sorted (cell key, vertex) pairs;
+// each facet visits the grid cells its bounding box covers.
+template <int Dim> std::string find_hanging_node(const Mesh &mesh, const std::vector<VertexId> &bnd) {
+  const std::size_t nb = bnd.size() / Dim;
+  if (nb == 0) return {};
+  std::vector<char> is_bnd(mesh.num_vertices(), 0);
+  for (VertexId v : bnd) is_bnd[v] = 1;
+
+  double lo[Dim], hi[Dim];
+  std::fill(lo, lo + Dim, 1e300);
+  std::fill(hi, hi + Dim, -1e300);
+  for (std::size_t v = 0; v < is_bnd.size(); ++v)
+    if (is_bnd[v])
+      for (int d = 0; d < Dim; ++d) {
+        lo[d] = std::min(lo[d], mesh.point(VertexId(v))[d]);
+        hi[d] = std::max(hi[d], mesh.point(VertexId(v))[d]);
+      }
+  double h = 0;
+  double pts[Dim * Dim];
+  for (std::size_t f = 0; f < nb; ++f) {
+    gather<Dim>(mesh, &bnd[f * Dim], Dim, pts);
+    double ext = 0;
+    for (int d = 0; d < Dim; ++d) {
+      double a = pts[d], b = pts[d];
+      for (int k = 1; k < Dim; ++k) a = std::min(a, pts[k * Dim + d]), b = std::max(b, pts[k * Dim + d]);
+      ext = std::max(ext, b - a);
+    }
+    h += ext;
+  }
+  h /= double(nb);
+  if (!(h > 0)) return {};
+
+  constexpr int kBits = 64 / Dim;
+  constexpr double kMaxCells = double((std::uint64_t(1) << (kBits - 1)) - 1);
+  double cell_size[Dim];
+  std::int64_t ncell[Dim];
+  for (int d = 0; d < Dim; ++d) {
+    const double ext = hi[d] - lo[d];
+    cell_size[d] = std::max(h, ext / kMaxCells);
+    ncell[d] = std::int64_t(ext / cell_size[d]) + 1;
+  }
+  auto index = [&](double x, int d) {
+    const double t = std::floor((x - lo[d]) / cell_size[d]);
+    return std::int64_t(std::clamp(t, 0.0, double(ncell[d] - 1)));
+  };
+  auto key_of = [&](const std::int64_t *idx) {
+    std::uint64_t k = 0;
+    for (int d = 0; d < Dim; ++d) k |= std::uint64_t(idx[d]) << (kBits * d);
+    return k;
+  };
+
+  std::vector<std::pair<std::uint64_t, VertexId>> grid;
+  for (std::size_t v = 0; v < is_bnd.size(); ++v)
+    if (is_bnd[v]) {
+      std::int64_t idx[Dim];
+      for (int d = 0; d < Dim; ++d) idx[d] = index(mesh.point(VertexId(v))[d], d);
+      grid.push_back({key_of(idx), VertexId(v)});
+    }
+  std::sort(grid.begin(), grid.end());
+
+  for (std::size_t f = 0; f < nb; ++f) {
+    const VertexId *ids = &bnd[f * Dim];
+    gather<Dim>(mesh, ids, Dim, pts);
+    double flo[Dim], fhi[Dim], size2 = 0;
+    for (int i = 0; i < Dim; ++i)
+      for (int j = i + 1; j < Dim; ++j) size2 = std::max(size2, squared_distance<Dim>(pts + i * Dim, pts + j * Dim));
+    const double pad = 2 * kOnFacetTol * std::sqrt(size2);
+    std::int64_t ilo[Dim], ihi[Dim];
+    double cover = 1;
+    for (int d = 0; d < Dim; ++d) {
+      flo[d] = fhi[d] = pts[d];
+      for (int k = 1; k < Dim; ++k)
+        flo[d] = std::min(flo[d], pts[k * Dim + d]), fhi[d] = std::max(fhi[d], pts[k * Dim + d]);
+      flo[d] -= pad;
+      fhi[d] += pad;
+      ilo[d] = index(flo[d], d);
+      ihi[d] = index(fhi[d], d);
+      cover *= double(ihi[d] - ilo[d] + 1);
+    }
+    auto test = [&](VertexId v) {
+      if (std::find(ids, ids + Dim, v) != ids + Dim) return false;
+      const double *x = mesh.point(v);
+      for (int d = 0; d < Dim; ++d)
+        if (x[d] < flo[d] || x[d] > fhi[d]) return false;
+      return on_facet<Dim>(pts, x);
+    };
+    auto report = [&](VertexId v) {
+      return "vertex " + std::to_string(v) + " lies on facet " + id_list(ids, Dim) + " (hanging node)";
+    };
+    if (cover > double(grid.size())) { // a huge facet: scanning everything is cheaper
+      for (const auto &g : grid)
+        if (test(g.second)) return report(g.second);
+      continue;
+    }
+    std::int64_t idx[Dim];
+    std::copy(ilo, ilo + Dim, idx);
+    for (;;) {
+      const std::uint64_t k = key_of(idx);
+      auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(k, VertexId(0)));
+      for (; it != grid.end() && it->first == k; ++it)
+        if (test(it->second)) return report(it->second);
+      int d = 0;
+      while (d < Dim && idx[d] == ihi[d]) idx[d] = ilo[d], ++d;
+      if (d == Dim) break;
+      ++idx[d];
+    }
+  }
+  return {};
+}
+
+template <class F> decltype(auto) dispatch(int dim, F &&f) {
+  switch (dim) {
+  case 2: return f.template operator()<2>();
+  case 3: return f.template operator()<3>();
+  case 4: return f.template operator()<4>();
+  default:
+    throw std::invalid_argument("unsupported dimension " + std::to_string(dim) +
+                                " (expected 2, 3 or 4)");
+  }
+}
+
+bool relative_change(double before, double after) {
+  const double scale = std::max(std::abs(before), std::abs(after));
+  return std::abs(after - before) > 1e-9 * scale;
+}
+
+} // namespace
+
+Invariants measure_invariants(const Mesh &mesh) {
+  if (mesh.num_cells() == 0) return {};
+  return dispatch(mesh.dim, [&]<int D>() {
+    Invariants inv;
+    std::size_t bad;
+    double bad_volume = 0;
+    inv.volume = cell_pass<D>(mesh, bad, bad_volume);
+    const FacetReport fr = facet_pass<D>(mesh, false);
+    inv.boundary_measure = fr.boundary_measure;
+    inv.boundary_facets = fr.boundary_facets;
+    inv.euler = euler_characteristic<D>(mesh, fr.facets);
+    return inv;
+  });
+}
+
+CheckResult check_conformity(const Mesh &mesh, const Invariants *original) {
+  auto fail = [](std::string what) { return CheckResult{false, std::move(what)}; };
+  if (std::string s = check_shape(mesh); !s.empty()) return fail(s);
+  if (std::string s = check_ids(mesh); !s.empty()) return fail(s);
+  return dispatch(mesh.dim, [&]<int D>() {
+    std::size_t bad;
+    double bad_volume = 0;
+    const double volume = cell_pass<D>(mesh, bad, bad_volume);
+    if (bad != std::size_t(-1)) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%g", bad_volume);
+      return fail("cell " + std::to_string(bad) + " is degenerate (volume " + buf + ")");
+    }
+    const FacetReport fr = facet_pass<D>(mesh, true);
+    if (!fr.nonmanifold.empty()) return fail(fr.nonmanifold);
+    if (!fr.overlap.empty()) return fail(fr.overlap);
+    if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty()) return fail(s);
+    if (original) {
+      if (relative_change(original->volume, volume))
+        return fail(format("volume changed: %.10g -> %.10g (relative %.2g)", original->volume, volume,
+                           std::abs(volume - original->volume) / std::abs(original->volume)));
+      if (relative_change(original->boundary_measure, fr.boundary_measure))
+        return fail(format("boundary measure changed: %.10g -> %.10g (relative %.2g)",
+                           original->boundary_measure, fr.boundary_measure,
+                           std::abs(fr.boundary_measure - original->boundary_measure) /
+                               std::abs(original->boundary_measure)));
+      const long long chi = euler_characteristic<D>(mesh, fr.facets);
+      if (chi != original->euler)
+        return fail("Euler characteristic changed: " + std::to_string(original->euler) + " -> " +
+                    std::to_string(chi));
+    }
+    return CheckResult{};
+  });
+}
+
+void prepare_input(Mesh &mesh, const std::string &path) {
+  if (std::string s = check_shape(mesh); !s.empty()) throw InputError(path, s);
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  for (std::size_t v = 0; v < nv; ++v)
+    for (int d = 0; d < mesh.dim; ++d)
+      if (!std::isfinite(mesh.point(VertexId(v))[d]))
+        throw InputError(path, "vertex " + std::to_string(v) + " has a non-finite coordinate");
+  if (std::string s = check_ids(mesh); !s.empty()) throw InputError(path, s);
+  const int n = mesh.cell_size();
+  for (std::size_t c = 0; c < nc; ++c) {
+    const VertexId *cell = mesh.cell(CellId(c));
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j)
+        if (cell[i] == cell[j])
+          throw InputError(path, "cell " + std::to_string(c) + " repeats vertex " + std::to_string(cell[i]));
+  }
+  dispatch(mesh.dim, [&]<int D>() {
+    std::size_t bad;
+    double bad_volume = 0;
+    cell_pass<D>(mesh, bad, bad_volume);
+    if (bad != std::size_t(-1)) throw InputError(path, "cell " + std::to_string(bad) + " has zero volume");
+    const FacetReport fr = facet_pass<D>(mesh, true);
+    if (!fr.nonmanifold.empty()) {
+      // "facet (a, b) is shared by 3 cells" -> "non-manifold: facet (a, b) shared by 3 cells"
+      std::string s = fr.nonmanifold;
+      s.replace(s.find(" is shared"), 10, " shared");
+      throw InputError(path, "non-manifold: " + s);
+    }
+    if (!fr.overlap.empty()) throw InputError(path, "tangled: " + fr.overlap);
+    if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
+      throw InputError(path, "non-conforming input: " + s);
+    // Orient every cell positively (a negatively oriented cell is not an error).
+    double pts[(D + 1) * D];
+    for (std::size_t c = 0; c < nc; ++c) {
+      VertexId *cell = mesh.cell(CellId(c));
+      gather<D>(mesh, cell, D + 1, pts);
+      if (signed_volume(pts, D) < 0) std::swap(cell[0], cell[1]);
+    }
+  });
+}
+
+} // namespace bisect

@@ -1,0 +1,543 @@
+// VTK XML unstructured grid (.vtu) reading and writing. The only translation
+// unit that includes VTK headers.
+//
+// Conventions:
+//  - 2D: triangles with all z == 0; 3D: tetrahedra.
+//  - 4D: field data "SpatialDimension" == 4; Points hold (x, y, z); point
+//    array "t" (Float64, 1 component) holds the 4th coordinate; every
+//    pentatope is one VTK_POLY_VERTEX cell with 5 ids (VTK_CONVEX_POINT_SET
+//    with 5 ids is accepted on reading).
+//
+// VTK reports errors through its output window, never by exceptions. While a
+// file is read or written, every VTK error is collected (observers on the
+// reader/writer and a quiet global output window) and turned into one
+// InputError naming the file; VTK never prints to stderr.
+#include "io.hpp"
+
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkCellType.h>
+#include <vtkCommand.h>
+#include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkErrorCode.h>
+#include <vtkFieldData.h>
+#include <vtkGenericCell.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
+#include <vtkObjectFactory.h>
+#include <vtkOutputWindow.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkSmartPointer.h>
+#include <vtkTypeInt64Array.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace bisect {
+namespace {
+
+// ---------------------------------------------------------------------------
+// Turning VTK's error reports into one exception.
+
+// Collects the messages of one read or write; the first error is reported.
+struct ErrorLog {
+  std::vector<std::string> errors;
+};
+
+// The log of the read/write in progress on this thread (VTK's output window
+// is process-global, so the active log has to be reachable from it).
+thread_local ErrorLog *active_log = nullptr;
+
+// Removes VTK's decoration ("ERROR: In file.cxx, line N", "vtkFoo (0x...): ")
+// and squeezes the message onto one short line.
+std::string clean_vtk_message(std::string text) {
+  if (text.rfind("ERROR: In ", 0) == 0) {
+    auto nl = text.find('\n');
+    text = nl == std::string::npos ? std::string() : text.substr(nl + 1);
+  }
+  // "vtkClassName (0x55d0c0): message"
+  if (text.rfind("vtk", 0) == 0) {
+    auto paren = text.find(" (");
+    auto close = text.find("): ");
+    if (paren != std::string::npos && close != std::string::npos && paren < close &&
+        close < 120)
+      text = text.substr(close + 3);
+  }
+  std::string out;
+  for (char c : text) {
+    bool space = c == '\n' || c == '\r' || c == '\t' || c == ' ';
+    if (space) {
+      if (!out.empty() && out.back() != ' ')
+        out += ' ';
+    } else {
+      out += c;
+    }
+  }
+  while (!out.empty() && (out.back() == ' ' || out.back() == '.'))
+    out.pop_back();
+  if (out.size() > 200)
+    out = out.substr(0, 197) + "...";
+  return out.empty() ? std::string("unknown VTK error") : out;
+}
+
+// Output window that never prints: errors go to the active log, the rest
+// (warnings, debug text) is dropped.
+class QuietOutputWindow : public vtkOutputWindow {
+public:
+  static QuietOutputWindow *New();
+  vtkTypeMacro(QuietOutputWindow, vtkOutputWindow);
+  void DisplayText(const char *) override {}
+  void DisplayErrorText(const char *text) override {
+    if (active_log && text)
+      active_log->errors.push_back(clean_vtk_message(text));
+  }
+  void DisplayWarningText(const char *) override {}
+  void DisplayGenericWarningText(const char *) override {}
+  void DisplayDebugText(const char *) override {}
+};
+vtkStandardNewMacro(QuietOutputWindow);
+
+// Observer attached to VTK objects: ErrorEvent carries the message text.
+class ErrorObserver : public vtkCommand {
+public:
+  static ErrorObserver *New() { return new ErrorObserver; }
+  void Execute(vtkObject *, unsigned long event, void *data) override {
+    if (event == vtkCommand::ErrorEvent && active_log)
+      active_log->errors.push_back(
+          clean_vtk_message(data ? static_cast<const char *>(data) : ""));
+  }
+};
+
+void install_quiet_output_window() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    vtkNew<QuietOutputWindow> window;
+    vtkOutputWindow::SetInstance(window);
+  });
+}
+
+// Makes `log` the active log for its lifetime.
+struct ActiveLog {
+  ErrorLog log;
+  ErrorLog *previous;
+  ActiveLog() : previous(active_log) {
+    install_quiet_output_window();
+    active_log = &log;
+  }
+  ~ActiveLog() { active_log = previous; }
+  ActiveLog(const ActiveLog &) = delete;
+  ActiveLog &operator=(const ActiveLog &) = delete;
+};
+
+// ---------------------------------------------------------------------------
+// Reading.
+
+constexpr int kNoDim = -1;
+
+// Topological dimension of a VTK cell type (cached per type: it is a
+// property of the type, the generic cell is only used for unusual types).
+struct CellDims {
+  std::array<int, 256> dim;
+  vtkNew<vtkGenericCell> cell;
+  CellDims() { dim.fill(-2); }
+  int of(vtkUnstructuredGrid *grid, vtkIdType c, int type) {
+    if (dim[type] == -2) {
+      switch (type) {
+      case VTK_EMPTY_CELL: dim[type] = kNoDim; break;
+      case VTK_VERTEX:
+      case VTK_POLY_VERTEX: dim[type] = 0; break;
+      case VTK_LINE:
+      case VTK_POLY_LINE: dim[type] = 1; break;
+      case VTK_TRIANGLE:
+      case VTK_TRIANGLE_STRIP:
+      case VTK_POLYGON:
+      case VTK_PIXEL:
+      case VTK_QUAD: dim[type] = 2; break;
+      case VTK_TETRA:
+      case VTK_VOXEL:
+      case VTK_HEXAHEDRON:
+      case VTK_WEDGE:
+      case VTK_PYRAMID:
+      case VTK_CONVEX_POINT_SET:
+      case VTK_POLYHEDRON: dim[type] = 3; break;
+      default:
+        grid->GetCell(c, cell);
+        dim[type] = cell->GetCellDimension();
+      }
+    }
+    return dim[type];
+  }
+};
+
+// Reads the file; throws with the first VTK error if anything went wrong.
+vtkSmartPointer<vtkUnstructuredGrid> load_grid(const std::string &path) {
+  ActiveLog active;
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  vtkNew<ErrorObserver> observer;
+  reader->AddObserver(vtkCommand::ErrorEvent, observer);
+  reader->SetReaderErrorObserver(observer);
+  reader->SetParserErrorObserver(observer);
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  auto &errors = active.log.errors;
+  if (!errors.empty())
+    throw InputError(path, errors.front());
+  if (reader->GetErrorCode() != vtkErrorCode::NoError)
+    throw InputError(path, vtkErrorCode::GetStringFromErrorCode(reader->GetErrorCode()));
+  vtkUnstructuredGrid *grid = reader->GetOutput();
+  if (!grid)
+    throw InputError(path, "not a VTK unstructured grid");
+  return grid;
+}
+
+std::string array_name(vtkAbstractArray *a, int index) {
+  const char *n = a->GetName();
+  return n && *n ? std::string(n) : "unnamed" + std::to_string(index);
+}
+
+// The 4D convention is on when field data "SpatialDimension" says 4.
+bool is_4d(vtkUnstructuredGrid *grid) {
+  vtkFieldData *fd = grid->GetFieldData();
+  vtkDataArray *sd = fd ? fd->GetArray("SpatialDimension") : nullptr;
+  return sd && sd->GetNumberOfTuples() >= 1 && sd->GetNumberOfComponents() >= 1 &&
+         sd->GetComponent(0, 0) == 4.0;
+}
+
+// The cells kept by the reader (file ids) and the dimension they define.
+struct KeptCells {
+  int dim = 0;
+  std::vector<vtkIdType> ids;
+};
+
+KeptCells select_cells_4d(const std::string &path, vtkUnstructuredGrid *grid) {
+  KeptCells kept{4, {}};
+  const vtkIdType nc = grid->GetNumberOfCells();
+  for (vtkIdType c = 0; c < nc; ++c) {
+    const int type = grid->GetCellType(c);
+    vtkIdType npts = 0;
+    const vtkIdType *pts = nullptr;
+    grid->GetCellPoints(c, npts, pts);
+    if (type == VTK_POLY_VERTEX || type == VTK_CONVEX_POINT_SET) {
+      if (npts != 5)
+        throw InputError(path, "4D mesh: cell " + std::to_string(c) + " has " +
+                                   std::to_string(npts) + " vertices, expected 5");
+      kept.ids.push_back(c);
+    } else if (type != VTK_VERTEX && type != VTK_LINE && type != VTK_TRIANGLE &&
+               type != VTK_TETRA && type != VTK_EMPTY_CELL) {
+      // Lower-dimensional simplices (boundary pieces) are ignored; anything
+      // else cannot be part of a pentatope mesh.
+      throw InputError(path, "4D mesh: cell " + std::to_string(c) + " has VTK type " +
+                                 std::to_string(type) +
+                                 ", expected a 5-vertex poly-vertex (type 2)");
+    }
+  }
+  if (kept.ids.empty())
+    throw InputError(path, "4D mesh: no pentatopes (5-vertex poly-vertex cells)");
+  return kept;
+}
+
+// Keeps the simplices of the highest dimension; lower-dimensional cells are
+// ignored, a non-simplex cell of that dimension or higher is an error.
+KeptCells select_cells(const std::string &path, vtkUnstructuredGrid *grid) {
+  const vtkIdType nc = grid->GetNumberOfCells();
+  int dim = 0;
+  for (vtkIdType c = 0; c < nc; ++c) {
+    const int type = grid->GetCellType(c);
+    if (type == VTK_TETRA)
+      dim = 3;
+    else if (type == VTK_TRIANGLE && dim < 2)
+      dim = 2;
+  }
+  CellDims dims;
+  if (dim == 0) {
+    for (vtkIdType c = 0; c < nc; ++c) {
+      const int type = grid->GetCellType(c);
+      if (dims.of(grid, c, type) >= 2)
+        throw InputError(path, "no triangles or tetrahedra (found non-simplex cells, VTK "
+                               "type " + std::to_string(type) + ")");
+    }
+    throw InputError(path, "no triangles or tetrahedra");
+  }
+  const int simplex = dim == 2 ? VTK_TRIANGLE : VTK_TETRA;
+  KeptCells kept{dim, {}};
+  for (vtkIdType c = 0; c < nc; ++c) {
+    const int type = grid->GetCellType(c);
+    if (type == simplex)
+      kept.ids.push_back(c);
+    else if (dims.of(grid, c, type) >= dim)
+      throw InputError(path, "mixed non-simplex cells (VTK type " + std::to_string(type) + ")");
+  }
+  return kept;
+}
+
+// A numeric array with one tuple per entity; nullptr for non-numeric arrays.
+vtkDataArray *numeric_array(const std::string &path, vtkAbstractArray *a, int index,
+                            vtkIdType expected, const char *where) {
+  auto *d = vtkDataArray::SafeDownCast(a);
+  if (!d)
+    return nullptr;
+  if (d->GetNumberOfTuples() != expected)
+    throw InputError(path, std::string(where) + " array '" + array_name(a, index) + "' has " +
+                               std::to_string(d->GetNumberOfTuples()) + " tuples, expected " +
+                               std::to_string(expected));
+  return d;
+}
+
+// Copies the selected tuples (file ids in `rows`) of `d` into a DataArray.
+DataArray copy_rows(vtkDataArray *d, const std::string &name, const std::vector<vtkIdType> &rows) {
+  DataArray out;
+  out.name = name;
+  out.components = d->GetNumberOfComponents();
+  out.values.reserve(rows.size() * out.components);
+  for (vtkIdType r : rows)
+    for (int k = 0; k < out.components; ++k)
+      out.values.push_back(d->GetComponent(r, k));
+  return out;
+}
+
+// The 4th coordinate array of the 4D convention, checked.
+vtkDataArray *time_array(const std::string &path, vtkUnstructuredGrid *grid) {
+  vtkDataArray *t = grid->GetPointData()->GetArray("t");
+  if (!t)
+    throw InputError(path, "4D mesh: point data array 't' (4th coordinate) is missing or not numeric");
+  if (t->GetNumberOfComponents() != 1)
+    throw InputError(path, "4D mesh: point data array 't' has " +
+                               std::to_string(t->GetNumberOfComponents()) +
+                               " components, expected 1");
+  if (t->GetNumberOfTuples() != grid->GetNumberOfPoints())
+    throw InputError(path, "4D mesh: point data array 't' has " +
+                               std::to_string(t->GetNumberOfTuples()) + " values, expected " +
+                               std::to_string(grid->GetNumberOfPoints()) + " (one per point)");
+  return t;
+}
+
+Mesh grid_to_mesh(const std::string &path, vtkUnstructuredGrid *grid) {
+  const bool four = is_4d(grid);
+  const vtkIdType np = grid->GetNumberOfPoints();
+  if (np >= vtkIdType(kNoVertex))
+    throw InputError(path, "too many points (" + std::to_string(np) + ")");
+  KeptCells kept = four ? select_cells_4d(path, grid) : select_cells(path, grid);
+  if (kept.ids.size() >= std::size_t(kNoCell))
+    throw InputError(path, "too many cells");
+  vtkDataArray *t = four ? time_array(path, grid) : nullptr;
+
+  // Cells, with their vertices numbered compactly in file order.
+  const int nvc = kept.dim + 1;
+  std::vector<VertexId> new_id(std::size_t(np), kNoVertex);
+  for (vtkIdType c : kept.ids) {
+    vtkIdType npts = 0;
+    const vtkIdType *pts = nullptr;
+    grid->GetCellPoints(c, npts, pts);
+    for (int i = 0; i < nvc; ++i) {
+      if (pts[i] < 0 || pts[i] >= np)
+        throw InputError(path, "cell " + std::to_string(c) + " refers to point " +
+                                   std::to_string(pts[i]) + ", but there are " +
+                                   std::to_string(np) + " points");
+      for (int j = 0; j < i; ++j)
+        if (pts[j] == pts[i])
+          throw InputError(path, "cell " + std::to_string(c) + " repeats point " +
+                                     std::to_string(pts[i]));
+      new_id[pts[i]] = 0; // used
+    }
+  }
+  std::vector<vtkIdType> used; // file ids of the kept points, in order
+  for (vtkIdType p = 0; p < np; ++p)
+    if (new_id[p] != kNoVertex) {
+      new_id[p] = VertexId(used.size());
+      used.push_back(p);
+    }
+
+  Mesh mesh;
+  mesh.dim = kept.dim;
+  mesh.cells.reserve(kept.ids.size() * nvc);
+  for (vtkIdType c : kept.ids) {
+    vtkIdType npts = 0;
+    const vtkIdType *pts = nullptr;
+    grid->GetCellPoints(c, npts, pts);
+    for (int i = 0; i < nvc; ++i)
+      mesh.cells.push_back(new_id[pts[i]]);
+  }
+
+  // Coordinates: (x, y) in 2D, (x, y, z) in 3D, (x, y, z, t) in 4D.
+  mesh.coords.reserve(used.size() * mesh.dim);
+  for (vtkIdType p : used) {
+    double x[4] = {0, 0, 0, 0};
+    grid->GetPoint(p, x);
+    if (four)
+      x[3] = t->GetComponent(p, 0);
+    for (int k = 0; k < (four ? 4 : 3); ++k)
+      if (!std::isfinite(x[k]))
+        throw InputError(path, "point " + std::to_string(p) + " has a non-finite coordinate");
+    if (mesh.dim == 2 && x[2] != 0.0)
+      throw InputError(path, "surface mesh in 3D not supported (point " + std::to_string(p) +
+                                 " of a triangle has z = " + std::to_string(x[2]) + ")");
+    mesh.coords.insert(mesh.coords.end(), x, x + mesh.dim);
+  }
+
+  // Numeric point and cell arrays; "t" of the 4D convention is a coordinate.
+  vtkPointData *pd = grid->GetPointData();
+  for (int i = 0; i < pd->GetNumberOfArrays(); ++i) {
+    vtkAbstractArray *a = pd->GetAbstractArray(i);
+    if (four && a == t)
+      continue;
+    if (vtkDataArray *d = numeric_array(path, a, i, np, "point data"))
+      mesh.point_data.push_back(copy_rows(d, array_name(a, i), used));
+  }
+  vtkCellData *cd = grid->GetCellData();
+  for (int i = 0; i < cd->GetNumberOfArrays(); ++i) {
+    vtkAbstractArray *a = cd->GetAbstractArray(i);
+    if (vtkDataArray *d = numeric_array(path, a, i, grid->GetNumberOfCells(), "cell data"))
+      mesh.cell_data.push_back(copy_rows(d, array_name(a, i), kept.ids));
+  }
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------
+// Writing.
+
+void check_mesh_for_writing(const std::string &path, const Mesh &mesh) {
+  auto fail = [&](const std::string &what) { throw CheckError(path + ": cannot write: " + what); };
+  if (mesh.dim < 2 || mesh.dim > 4)
+    fail("mesh dimension " + std::to_string(mesh.dim) + " is not 2, 3 or 4");
+  if (mesh.coords.size() % mesh.dim || mesh.cells.size() % (mesh.dim + 1))
+    fail("coordinate or cell array has a partial entry");
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  for (VertexId v : mesh.cells)
+    if (v >= nv)
+      fail("a cell refers to vertex " + std::to_string(v) + " of " + std::to_string(nv));
+  for (const auto &a : mesh.point_data)
+    if (a.components < 1 || a.values.size() != nv * a.components)
+      fail("point array '" + a.name + "' does not have one tuple per vertex");
+  for (const auto &a : mesh.cell_data)
+    if (a.components < 1 || a.values.size() != nc * a.components)
+      fail("cell array '" + a.name + "' does not have one tuple per cell");
+  if (mesh.dim == 4)
+    for (const auto &a : mesh.point_data)
+      if (a.name == "t")
+        fail("point array 't' is reserved for the 4th coordinate of 4D meshes");
+}
+
+// Fails early with the system's reason when the file cannot be created.
+void check_writable(const std::string &path) {
+  std::FILE *f = std::fopen(path.c_str(), "wb");
+  if (!f)
+    throw InputError(path, std::string("cannot write: ") + std::strerror(errno));
+  std::fclose(f);
+}
+
+template <class ArrayT>
+vtkSmartPointer<ArrayT> make_array(const DataArray &a) {
+  auto out = vtkSmartPointer<ArrayT>::New();
+  out->SetName(a.name.c_str());
+  out->SetNumberOfComponents(a.components);
+  out->SetNumberOfTuples(vtkIdType(a.values.size() / a.components));
+  for (std::size_t i = 0; i < a.values.size(); ++i)
+    out->SetValue(vtkIdType(i), static_cast<typename ArrayT::ValueType>(a.values[i]));
+  return out;
+}
+
+// Integer-valued cell arrays (tags, ids) stay integers in the file.
+bool fits_int32(const std::vector<double> &values) {
+  for (double v : values)
+    if (!(v >= std::numeric_limits<std::int32_t>::min() &&
+          v <= std::numeric_limits<std::int32_t>::max() && v == std::trunc(v)))
+      return false;
+  return true;
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> mesh_to_grid(const Mesh &mesh) {
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  const int dim = mesh.dim, nvc = dim + 1;
+  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(vtkIdType(nv));
+  for (std::size_t v = 0; v < nv; ++v) {
+    const double *x = mesh.point(VertexId(v));
+    points->SetPoint(vtkIdType(v), x[0], x[1], dim >= 3 ? x[2] : 0.0);
+  }
+  grid->SetPoints(points);
+
+  // Cells in stored vertex order, 64-bit offsets and connectivity.
+  vtkNew<vtkTypeInt64Array> offsets, connectivity;
+  offsets->SetNumberOfValues(vtkIdType(nc + 1));
+  connectivity->SetNumberOfValues(vtkIdType(nc * nvc));
+  for (std::size_t c = 0; c <= nc; ++c)
+    offsets->SetValue(vtkIdType(c), vtkTypeInt64(c * nvc));
+  for (std::size_t i = 0; i < mesh.cells.size(); ++i)
+    connectivity->SetValue(vtkIdType(i), mesh.cells[i]);
+  vtkNew<vtkCellArray> cells;
+  cells->SetData(offsets, connectivity);
+  const int type = dim == 2 ? VTK_TRIANGLE : dim == 3 ? VTK_TETRA : VTK_POLY_VERTEX;
+  grid->SetCells(type, cells);
+
+  for (const auto &a : mesh.point_data)
+    grid->GetPointData()->AddArray(make_array<vtkDoubleArray>(a));
+  for (const auto &a : mesh.cell_data) {
+    if (fits_int32(a.values))
+      grid->GetCellData()->AddArray(make_array<vtkIntArray>(a));
+    else
+      grid->GetCellData()->AddArray(make_array<vtkDoubleArray>(a));
+  }
+
+  if (dim == 4) {
+    DataArray t{"t", 1, {}};
+    t.values.reserve(nv);
+    for (std::size_t v = 0; v < nv; ++v)
+      t.values.push_back(mesh.point(VertexId(v))[3]);
+    grid->GetPointData()->AddArray(make_array<vtkDoubleArray>(t));
+    vtkNew<vtkIntArray> sd;
+    sd->SetName("SpatialDimension");
+    sd->SetNumberOfValues(1);
+    sd->SetValue(0, 4);
+    grid->GetFieldData()->AddArray(sd);
+  }
+  return grid;
+}
+
+} // namespace
+
+Mesh read_vtu(const std::string &path) {
+  vtkSmartPointer<vtkUnstructuredGrid> grid = load_grid(path);
+  return grid_to_mesh(path, grid);
+}
+
+void write_vtu(const std::string &path, const Mesh &mesh) {
+  check_mesh_for_writing(path, mesh);
+  check_writable(path);
+  vtkSmartPointer<vtkUnstructuredGrid> grid = mesh_to_grid(mesh);
+
+  ActiveLog active;
+  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  vtkNew<ErrorObserver> observer;
+  writer->AddObserver(vtkCommand::ErrorEvent, observer);
+  writer->SetFileName(path.c_str());
+  writer->SetInputData(grid);
+  writer->SetDataModeToBinary(); // inline base64, not raw appended
+  writer->SetCompressorTypeToZLib();
+  writer->SetHeaderTypeToUInt64();
+  writer->SetIdTypeToInt64();
+  const int ok = writer->Write();
+  auto &errors = active.log.errors;
+  if (!errors.empty())
+    throw InputError(path, "cannot write: " + errors.front());
+  if (!ok || writer->GetErrorCode() != vtkErrorCode::NoError)
+    throw InputError(path, std::string("cannot write: ") +
+                               vtkErrorCode::GetStringFromErrorCode(writer->GetErrorCode()));
+}
+
+} // namespace bisect
