@@ -91,7 +91,7 @@ def main():
         ax.set_ylabel("quality")
         ax.set_ylim(0.0, 1.05)
         ax.grid(True, alpha=0.3)
-        ax.legend(loc="lower left", fontsize="small")
+        ax.legend(loc="best", fontsize="small")
     if args.title:
         fig.suptitle(args.title)
     fig.tight_layout()

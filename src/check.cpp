@@ -20,6 +20,8 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace bisect {
@@ -89,23 +91,32 @@ template <int Dim, int K, class Visit> void for_each_subsimplex(const Mesh &mesh
   for (std::size_t c = 0; c < nc; ++c)
     for (int m = 0; m < M; ++m) refs[start[min_of(c, m) + 1]++] = std::uint32_t(c * M + m);
 
-  struct Entry {
-    std::array<VertexId, K> key;
-    std::uint32_t ref;
-    bool operator<(const Entry &o) const { return key != o.key ? key < o.key : ref < o.ref; }
-  };
-  std::vector<Entry> bucket;
+  // Within bucket v every key starts with v: pack the other K-1 ids and the
+  // reference into one integer, (id_1, ..., id_{K-1}, ref) from high to low
+  // bits, and sort those.
+  using Packed = std::conditional_t<K == 2, std::uint64_t, unsigned __int128>;
+  static_assert(K >= 2 && K <= 4);
+  std::vector<Packed> bucket;
   std::vector<std::uint32_t> group;
+  std::array<VertexId, K> key;
+  auto rest_of = [](Packed p) { return p >> 32; };
   for (std::size_t v = 0; v < nv; ++v) {
     bucket.clear();
-    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i)
-      bucket.push_back({key_of(refs[i] / M, int(refs[i] % M)), refs[i]});
+    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
+      const std::array<VertexId, K> k = key_of(refs[i] / M, int(refs[i] % M));
+      Packed p = 0;
+      for (int j = 1; j < K; ++j) p = (p << 32) | k[j];
+      bucket.push_back((p << 32) | refs[i]);
+    }
     std::sort(bucket.begin(), bucket.end());
+    key[0] = VertexId(v);
     for (std::size_t i = 0; i < bucket.size();) {
       std::size_t j = i;
       group.clear();
-      while (j < bucket.size() && bucket[j].key == bucket[i].key) group.push_back(bucket[j++].ref);
-      visit(bucket[i].key, group.data(), int(group.size()));
+      const Packed rest = rest_of(bucket[i]);
+      while (j < bucket.size() && rest_of(bucket[j]) == rest) group.push_back(std::uint32_t(bucket[j++]));
+      for (int t = K - 1; t >= 1; --t) key[t] = VertexId(rest >> (32 * (K - 1 - t)));
+      visit(std::as_const(key), group.data(), int(group.size()));
       i = j;
     }
   }
@@ -199,8 +210,10 @@ template <int Dim> double longest_squared_edge(const double *p) {
 
 // Degenerate: |vol| <= 1e-14 * (longest edge)^n.
 template <int Dim> bool degenerate(const double *p, double volume) {
-  const double l = std::sqrt(longest_squared_edge<Dim>(p));
-  return !(std::abs(volume) > 1e-14 * std::pow(l, Dim));
+  const double l2 = longest_squared_edge<Dim>(p);
+  double ln = Dim % 2 ? std::sqrt(l2) : 1; // l^Dim
+  for (int i = 0; i < Dim / 2; ++i) ln *= l2;
+  return !(std::abs(volume) > 1e-14 * ln);
 }
 
 // Tolerance for "x lies on a facet", relative to the facet's longest edge and

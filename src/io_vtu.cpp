@@ -24,6 +24,7 @@
 #include <vtkFieldData.h>
 #include <vtkGenericCell.h>
 #include <vtkIntArray.h>
+#include <vtkLogger.h>
 #include <vtkNew.h>
 #include <vtkObjectFactory.h>
 #include <vtkOutputWindow.h>
@@ -126,6 +127,8 @@ void install_quiet_output_window() {
   std::call_once(once, [] {
     vtkNew<QuietOutputWindow> window;
     vtkOutputWindow::SetInstance(window);
+    // The pipeline also logs failures through vtkLogger, straight to stderr.
+    vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
   });
 }
 
@@ -141,6 +144,20 @@ struct ActiveLog {
   ActiveLog(const ActiveLog &) = delete;
   ActiveLog &operator=(const ActiveLog &) = delete;
 };
+
+// A message for an error code set without any error text (vtkErrorCode's
+// own string table lives in VTK::CommonMisc, which we do not link).
+std::string error_code_text(unsigned long code) {
+  switch (code) {
+  case vtkErrorCode::FileNotFoundError: return "file not found";
+  case vtkErrorCode::CannotOpenFileError: return "cannot open file";
+  case vtkErrorCode::UnrecognizedFileTypeError: return "unrecognized file type";
+  case vtkErrorCode::PrematureEndOfFileError: return "premature end of file";
+  case vtkErrorCode::FileFormatError: return "file format error";
+  case vtkErrorCode::OutOfDiskSpaceError: return "out of disk space";
+  default: return "VTK error code " + std::to_string(code);
+  }
+}
 
 // ---------------------------------------------------------------------------
 // Reading.
@@ -196,7 +213,7 @@ vtkSmartPointer<vtkUnstructuredGrid> load_grid(const std::string &path) {
   if (!errors.empty())
     throw InputError(path, errors.front());
   if (reader->GetErrorCode() != vtkErrorCode::NoError)
-    throw InputError(path, vtkErrorCode::GetStringFromErrorCode(reader->GetErrorCode()));
+    throw InputError(path, error_code_text(reader->GetErrorCode()));
   vtkUnstructuredGrid *grid = reader->GetOutput();
   if (!grid)
     throw InputError(path, "not a VTK unstructured grid");
@@ -536,8 +553,7 @@ void write_vtu(const std::string &path, const Mesh &mesh) {
   if (!errors.empty())
     throw InputError(path, "cannot write: " + errors.front());
   if (!ok || writer->GetErrorCode() != vtkErrorCode::NoError)
-    throw InputError(path, std::string("cannot write: ") +
-                               vtkErrorCode::GetStringFromErrorCode(writer->GetErrorCode()));
+    throw InputError(path, "cannot write: " + error_code_text(writer->GetErrorCode()));
 }
 
 } // namespace bisect

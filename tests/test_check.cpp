@@ -1,0 +1,311 @@
+// Tests for src/check.cpp: invariants, conformity, input validation.
+#include "check.hpp"
+#include "generate.hpp"
+#include "measure.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+using namespace bisect;
+using Catch::Contains;
+using Catch::StartsWith;
+
+namespace {
+
+Mesh make_mesh(int dim, std::vector<double> coords, std::vector<VertexId> cells) {
+  Mesh m;
+  m.dim = dim;
+  m.coords = std::move(coords);
+  m.cells = std::move(cells);
+  return m;
+}
+
+double factorial(int n) { return n <= 1 ? 1 : n * factorial(n - 1); }
+
+VertexId add_vertex(Mesh &m, const std::vector<double> &x) {
+  m.coords.insert(m.coords.end(), x.begin(), x.end());
+  return VertexId(m.num_vertices() - 1);
+}
+
+// In the Kuhn cube [0,1]^dim (k = 1) every cell contains the main diagonal
+// from vertex 0 to vertex 2^dim - 1. Returns the local index in cell 0 of a
+// vertex off that diagonal: the facet opposite it is interior.
+int off_diagonal_local(const Mesh &m) {
+  const VertexId last = VertexId(m.num_vertices() - 1);
+  for (int i = 0; i <= m.dim; ++i)
+    if (m.cell(0)[i] != 0 && m.cell(0)[i] != last) return i;
+  return -1;
+}
+
+// Bisects cell 0 of a k = 1 Kuhn cube by the main diagonal, leaving every
+// other cell (they all contain the diagonal) with a hanging midpoint.
+VertexId bisect_first_cell_by_diagonal(Mesh &m) {
+  const int n = m.dim + 1;
+  const VertexId last = VertexId(m.num_vertices() - 1);
+  const VertexId mid = add_vertex(m, std::vector<double>(m.dim, 0.5));
+  std::vector<VertexId> a(m.cell(0), m.cell(0) + n), b = a;
+  std::replace(a.begin(), a.end(), last, mid);
+  std::replace(b.begin(), b.end(), VertexId(0), mid);
+  std::copy(a.begin(), a.end(), m.cell(0));
+  m.cells.insert(m.cells.end(), b.begin(), b.end());
+  return mid;
+}
+
+std::string prepare_error(Mesh m, const std::string &path) {
+  try {
+    prepare_input(m, path);
+  } catch (const InputError &e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+} // namespace
+
+TEST_CASE("check: invariants of a single cartesian simplex", "[check][2d][3d][4d]") {
+  const int dim = GENERATE(2, 3, 4);
+  const Invariants inv = measure_invariants(generate_simplex(dim, SimplexShape::Cartesian));
+  CHECK(inv.volume == Approx(1.0 / factorial(dim)));
+  CHECK(inv.boundary_facets == std::size_t(dim + 1));
+  // dim facets in the coordinate hyperplanes, and the slanted one of measure sqrt(n)/(n-1)!.
+  CHECK(inv.boundary_measure == Approx((dim + std::sqrt(double(dim))) / factorial(dim - 1)));
+  CHECK(inv.euler == 1);
+}
+
+TEST_CASE("check: a Kuhn mesh passes against its own invariants, also after relabelling",
+          "[check][2d][3d][4d]") {
+  const int dim = GENERATE(2, 3, 4);
+  Mesh m = generate_kuhn(dim, 2);
+  const Invariants inv = measure_invariants(m);
+  CHECK(check_conformity(m).ok);
+  // Reverse the vertex numbering: nothing geometric changes.
+  const VertexId nv = VertexId(m.num_vertices());
+  Mesh r = m;
+  for (VertexId &v : r.cells) v = nv - 1 - v;
+  for (VertexId v = 0; v < nv; ++v)
+    std::copy(m.point(v), m.point(v) + dim, r.coords.begin() + std::size_t(nv - 1 - v) * dim);
+  const CheckResult res = check_conformity(r, &inv);
+  INFO(res.failure);
+  CHECK(res.ok);
+}
+
+TEST_CASE("check: a facet shared by three cells is found", "[check][2d][3d][4d]") {
+  SECTION("2D by hand") {
+    Mesh m = make_mesh(2, {0, 0, 1, 0, 0.5, 1, 0.5, -1, 0.5, 2}, {0, 1, 2, 1, 0, 3, 0, 1, 4});
+    const CheckResult r = check_conformity(m);
+    CHECK_FALSE(r.ok);
+    CHECK(r.failure == "facet (0, 1) is shared by 3 cells");
+    CHECK(prepare_error(m, "fan.msh") == "fan.msh: non-manifold: facet (0, 1) shared by 3 cells");
+  }
+  SECTION("a third cell on an interior facet of a Kuhn cube") {
+    const int dim = GENERATE(2, 3, 4);
+    Mesh m = generate_kuhn(dim, 1);
+    const int skip = off_diagonal_local(m);
+    std::vector<VertexId> extra;
+    for (int i = 0; i <= dim; ++i)
+      if (i != skip) extra.push_back(m.cell(0)[i]);
+    std::vector<double> far(dim, 3.0);
+    far[0] = -2.0;
+    extra.push_back(add_vertex(m, far));
+    m.cells.insert(m.cells.end(), extra.begin(), extra.end());
+    const CheckResult r = check_conformity(m);
+    CHECK_FALSE(r.ok);
+    CHECK_THAT(r.failure, StartsWith("facet (") && Contains(") is shared by 3 cells"));
+    CHECK_THAT(prepare_error(m, "k.vtu"), StartsWith("k.vtu: non-manifold: facet ("));
+  }
+}
+
+TEST_CASE("check: a tangled mesh (two overlapping cells) is rejected", "[check][2d][3d][4d]") {
+  SECTION("2D by hand") {
+    // Both opposite vertices of edge (0, 1) lie above it.
+    Mesh m = make_mesh(2, {0, 0, 1, 0, 0, 1, 0.4, 0.4}, {0, 1, 2, 1, 0, 3});
+    const CheckResult r = check_conformity(m);
+    CHECK_FALSE(r.ok);
+    CHECK(r.failure == "cells 0 and 1 overlap across facet (0, 1)");
+    CHECK(prepare_error(m, "t.vtu") == "t.vtu: tangled: cells 0 and 1 overlap across facet (0, 1)");
+  }
+  SECTION("a Kuhn cell folded onto its neighbour") {
+    const int dim = GENERATE(2, 3, 4);
+    Mesh m = generate_kuhn(dim, 1);
+    const int skip = off_diagonal_local(m);
+    const VertexId opposite = m.cell(0)[skip];
+    std::vector<VertexId> facet;
+    for (int i = 0; i <= dim; ++i)
+      if (i != skip) facet.push_back(m.cell(0)[i]);
+    // P halfway between the facet's centroid and cell 0's opposite vertex:
+    // on cell 0's side of the facet.
+    std::vector<double> p(dim, 0.0);
+    for (VertexId v : facet)
+      for (int d = 0; d < dim; ++d) p[d] += m.point(v)[d] / dim;
+    for (int d = 0; d < dim; ++d) p[d] = 0.5 * (p[d] + m.point(opposite)[d]);
+    const VertexId pv = add_vertex(m, p);
+    // The neighbour across the facet now uses P instead of its own opposite vertex.
+    bool moved = false;
+    for (CellId c = 1; c < m.num_cells() && !moved; ++c) {
+      VertexId *cell = m.cell(c);
+      const int shared = int(std::count_if(facet.begin(), facet.end(), [&](VertexId v) {
+        return std::find(cell, cell + dim + 1, v) != cell + dim + 1;
+      }));
+      if (shared != dim) continue;
+      for (int i = 0; i <= dim; ++i)
+        if (std::find(facet.begin(), facet.end(), cell[i]) == facet.end()) cell[i] = pv;
+      moved = true;
+    }
+    REQUIRE(moved);
+    const CheckResult r = check_conformity(m);
+    CHECK_FALSE(r.ok);
+    CHECK_THAT(r.failure, StartsWith("cells 0 and ") && Contains(" overlap across facet ("));
+    CHECK_THAT(prepare_error(m, "k.vtu"), StartsWith("k.vtu: tangled: cells 0 and "));
+  }
+}
+
+TEST_CASE("check: a hanging node is rejected by prepare_input", "[check][2d][3d][4d]") {
+  const int dim = GENERATE(2, 3, 4);
+  Mesh m = generate_kuhn(dim, 1);
+  const Invariants before = measure_invariants(m);
+  const VertexId mid = bisect_first_cell_by_diagonal(m);
+  const std::string err = prepare_error(m, "h.vtu");
+  CHECK_THAT(err, StartsWith("h.vtu: non-conforming input: vertex " + std::to_string(mid) +
+                             " lies on facet (") &&
+                      Contains("(hanging node)"));
+  const CheckResult r = check_conformity(m, &before);
+  CHECK_FALSE(r.ok);
+  CHECK_THAT(r.failure, Contains("hanging node"));
+  // The volume alone does not see it.
+  CHECK(measure_invariants(m).volume == Approx(before.volume));
+}
+
+TEST_CASE("check: a square bisected by hand with a hanging hypotenuse midpoint is non-conforming",
+          "[check][2d]") {
+  // Square (0,1,2,3) split along the diagonal (0,2) into two triangles; then
+  // the lower one is bisected at the diagonal's midpoint 4, the upper is not.
+  const Mesh square = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1}, {0, 1, 2, 0, 2, 3});
+  const Invariants before = measure_invariants(square);
+  CHECK(before.euler == 1);
+  CHECK(before.boundary_measure == Approx(4));
+  Mesh m = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 0.5, 0.5}, {0, 1, 4, 1, 2, 4, 0, 2, 3});
+
+  CHECK(prepare_error(m, "square.vtu") ==
+        "square.vtu: non-conforming input: vertex 4 lies on facet (0, 2) (hanging node)");
+  const CheckResult r = check_conformity(m, &before);
+  CHECK_FALSE(r.ok);
+  CHECK(r.failure == "vertex 4 lies on facet (0, 2) (hanging node)");
+  // Every facet has at most two cells and the volume is unchanged, but the
+  // invariants see the crack: Euler characteristic 0, boundary longer by 2 sqrt 2.
+  const Invariants after = measure_invariants(m);
+  CHECK(after.volume == Approx(1));
+  CHECK(after.euler == 0);
+  CHECK(after.boundary_measure == Approx(4 + 2 * std::sqrt(2.0)));
+}
+
+TEST_CASE("check: hanging vertices that are not edge midpoints are caught too", "[check][2d][3d]") {
+  SECTION("2D: the square split at a third of its diagonal") {
+    Mesh m = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 1.0 / 3, 1.0 / 3}, {0, 1, 4, 1, 2, 4, 0, 2, 3});
+    CHECK_THAT(prepare_error(m, "s.vtu"), Contains("vertex 4 lies on facet (0, 2) (hanging node)"));
+  }
+  SECTION("3D: a face centre, on no edge at all") {
+    // Tets above and below triangle (0,1,2); the upper one is split into three
+    // by the centroid 5 of that triangle, the lower one is not.
+    Mesh m = make_mesh(3,
+                       {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.2, 0.2, 1, 0.2, 0.2, -1, 1.0 / 3, 1.0 / 3, 0},
+                       {0, 1, 5, 3, 1, 2, 5, 3, 2, 0, 5, 3, 0, 1, 2, 4});
+    CHECK(prepare_error(m, "f.vtu") ==
+          "f.vtu: non-conforming input: vertex 5 lies on facet (0, 1, 2) (hanging node)");
+    CHECK_THAT(check_conformity(m).failure, Contains("hanging node"));
+  }
+}
+
+TEST_CASE("check: negatively oriented cells are reoriented, not rejected", "[check][2d][3d][4d]") {
+  const int dim = GENERATE(2, 3, 4);
+  const Mesh kuhn = generate_kuhn(dim, 2);
+  Mesh m = kuhn;
+  for (std::size_t c = 0; c < m.num_cells(); c += 2) std::swap(m.cell(CellId(c))[0], m.cell(CellId(c))[1]);
+  CHECK(check_conformity(m).ok); // orientation is not a conformity property
+  REQUIRE_NOTHROW(prepare_input(m, "neg.vtu"));
+  CHECK(m.cells == kuhn.cells);
+  CHECK(m.coords == kuhn.coords);
+  std::vector<double> p((dim + 1) * dim);
+  for (std::size_t c = 0; c < m.num_cells(); ++c) {
+    cell_points(m, CellId(c), p.data());
+    CHECK(signed_volume(p.data(), dim) > 0);
+  }
+}
+
+TEST_CASE("check: a changed volume is reported", "[check][3d]") {
+  Mesh m = generate_kuhn(3, 2, 0.0, 2.0);
+  const Invariants inv = measure_invariants(m);
+  Mesh scaled = m;
+  for (double &x : scaled.coords) x *= 1 + 1e-4;
+  CheckResult r = check_conformity(scaled, &inv);
+  CHECK_FALSE(r.ok);
+  CHECK_THAT(r.failure, StartsWith("volume changed: 8 -> 8.002") && Contains("(relative 0.0003)"));
+  // Within the relative tolerance 1e-9 nothing is reported.
+  for (double &x : m.coords) x *= 1 + 1e-12;
+  r = check_conformity(m, &inv);
+  INFO(r.failure);
+  CHECK(r.ok);
+}
+
+TEST_CASE("check: changed boundary measure and Euler characteristic are reported", "[check][2d]") {
+  const Mesh m = generate_kuhn(2, 3);
+  Invariants inv = measure_invariants(m);
+  Invariants wrong = inv;
+  wrong.boundary_measure *= 1.5;
+  CHECK_THAT(check_conformity(m, &wrong).failure, StartsWith("boundary measure changed: 6 -> 4"));
+  wrong = inv;
+  wrong.euler = 2;
+  CHECK(check_conformity(m, &wrong).failure == "Euler characteristic changed: 2 -> 1");
+
+  // A real change of topology: remove the two centre triangles (an annulus).
+  Mesh annulus = m;
+  annulus.cells.clear();
+  std::vector<double> p(6);
+  for (CellId c = 0; c < m.num_cells(); ++c) {
+    cell_points(m, c, p.data());
+    const double cx = (p[0] + p[2] + p[4]) / 3, cy = (p[1] + p[3] + p[5]) / 3;
+    if (cx > 1.0 / 3 && cx < 2.0 / 3 && cy > 1.0 / 3 && cy < 2.0 / 3) continue;
+    annulus.cells.insert(annulus.cells.end(), m.cell(c), m.cell(c) + 3);
+  }
+  CHECK(annulus.num_cells() == m.num_cells() - 2);
+  CHECK(measure_invariants(annulus).euler == 0);
+  CHECK(check_conformity(annulus).ok);
+}
+
+TEST_CASE("check: a degenerate cell is reported with its index", "[check][2d]") {
+  Mesh m = make_mesh(2, {0, 0, 1, 0, 0, 1, 2, 0, 0.5, 1e-15}, {0, 1, 2, 1, 3, 4});
+  CHECK_THAT(check_conformity(m).failure, StartsWith("cell 1 is degenerate (volume "));
+  CHECK(prepare_error(m, "d.msh") == "d.msh: cell 1 has zero volume");
+}
+
+TEST_CASE("prepare_input rejects bad coordinates and ids, naming the file and the entity", "[check][2d]") {
+  const Mesh good = make_mesh(2, {0, 0, 1, 0, 0, 1}, {0, 1, 2});
+  SECTION("non-finite coordinate") {
+    Mesh m = good;
+    m.coords[3] = std::numeric_limits<double>::quiet_NaN();
+    CHECK(prepare_error(m, "a.msh") == "a.msh: vertex 1 has a non-finite coordinate");
+    m.coords[3] = std::numeric_limits<double>::infinity();
+    CHECK(prepare_error(m, "a.msh") == "a.msh: vertex 1 has a non-finite coordinate");
+  }
+  SECTION("id out of range") {
+    Mesh m = good;
+    m.cells[2] = 7;
+    CHECK(prepare_error(m, "a.msh") == "a.msh: cell 0 refers to vertex 7, but there are only 3 vertices");
+  }
+  SECTION("repeated vertex") {
+    Mesh m = good;
+    m.cells[2] = 1;
+    CHECK(prepare_error(m, "a.msh") == "a.msh: cell 0 repeats vertex 1");
+  }
+  SECTION("good input passes and keeps its marks") {
+    Mesh m = good;
+    m.stage = {Stage::Maubach};
+    m.tag = {2};
+    REQUIRE_NOTHROW(prepare_input(m, "a.msh"));
+    CHECK(m.stage == std::vector<Stage>{Stage::Maubach});
+    CHECK(m.tag == std::vector<std::uint8_t>{2});
+  }
+}

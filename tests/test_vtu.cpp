@@ -1,0 +1,539 @@
+// Reading and writing .vtu files, and the checks read_mesh/write_mesh make
+// before any format-specific code runs.
+#include "io.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+using namespace bisect;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A fresh directory under the system temp dir, removed at the end of the test.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    static int counter = 0;
+    path = fs::temp_directory_path() /
+           ("bisect_test_vtu_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    fs::remove_all(path, ignored);
+  }
+  std::string file(const std::string &name) const { return (path / name).string(); }
+  std::vector<std::string> entries() const {
+    std::vector<std::string> names;
+    for (const auto &e : fs::directory_iterator(path))
+      names.push_back(e.path().filename().string());
+    return names;
+  }
+};
+
+void write_text(const std::string &path, const std::string &text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+std::string read_text(const std::string &path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Runs `f`, returning the message of the InputError it throws and whatever
+// was printed to stderr meanwhile (redirected to a file).
+struct Failure {
+  bool threw = false;
+  std::string message;
+  std::string stderr_text;
+};
+
+Failure capture_failure(const std::function<void()> &f) {
+  Failure result;
+  const std::string err_file =
+      (fs::temp_directory_path() / ("bisect_test_vtu_stderr_" + std::to_string(::getpid())))
+          .string();
+  std::fflush(stderr);
+  const int saved = ::dup(2);
+  const int fd = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  ::dup2(fd, 2);
+  ::close(fd);
+  try {
+    f();
+  } catch (const InputError &e) {
+    result.threw = true;
+    result.message = e.what();
+  }
+  std::fflush(stderr);
+  ::dup2(saved, 2);
+  ::close(saved);
+  result.stderr_text = read_text(err_file);
+  std::remove(err_file.c_str());
+  return result;
+}
+
+// Expects reading `path` to fail with one clean line naming the file and
+// containing `expected`, with nothing printed to stderr.
+void require_clean_read_error(const std::string &path, const std::string &expected) {
+  Failure f = capture_failure([&] { read_mesh(path); });
+  INFO("message: " << f.message);
+  INFO("stderr: " << f.stderr_text);
+  REQUIRE(f.threw);
+  CHECK(f.message.find(fs::path(path).filename().string()) != std::string::npos);
+  CHECK(f.message.find(expected) != std::string::npos);
+  CHECK(f.message.find('\n') == std::string::npos);
+  CHECK(f.stderr_text.empty());
+}
+
+// Two tetrahedra sharing the face (1, 2, 3), with awkward coordinates and
+// point/cell arrays of several shapes.
+Mesh two_tets() {
+  Mesh m;
+  m.dim = 3;
+  m.coords = {0.1, 0.2, 0.3, 1.0 / 3.0, 0.0, 1e-300, 0.0, 2.0 / 7.0, 0.0,
+              0.0, 0.0, -1.7e5,     1.0, 1.0, 1.0};
+  m.cells = {0, 1, 2, 3, 4, 3, 2, 1};
+  m.point_data.push_back({"temperature", 1, {1.5, -2.25, 0.1, 1e10, std::numbers::pi}});
+  m.point_data.push_back({"velocity", 2, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9.5}});
+  m.cell_data.push_back({"region", 1, {7, -3}});
+  m.cell_data.push_back({"quality", 1, {0.5, 1.0 / 3.0}});
+  m.cell_data.push_back({"normal", 3, {1, 0, 0, 0, 1, 0}});
+  return m;
+}
+
+void require_same(const Mesh &a, const Mesh &b) {
+  REQUIRE(a.dim == b.dim);
+  REQUIRE(a.coords == b.coords);
+  REQUIRE(a.cells == b.cells);
+  REQUIRE(a.point_data.size() == b.point_data.size());
+  for (std::size_t i = 0; i < a.point_data.size(); ++i) {
+    CHECK(a.point_data[i].name == b.point_data[i].name);
+    CHECK(a.point_data[i].components == b.point_data[i].components);
+    CHECK(a.point_data[i].values == b.point_data[i].values);
+  }
+  REQUIRE(a.cell_data.size() == b.cell_data.size());
+  for (std::size_t i = 0; i < a.cell_data.size(); ++i) {
+    CHECK(a.cell_data[i].name == b.cell_data[i].name);
+    CHECK(a.cell_data[i].components == b.cell_data[i].components);
+    CHECK(a.cell_data[i].values == b.cell_data[i].values);
+  }
+}
+
+// A hand-written ASCII .vtu file (VTK's reference layout).
+struct AsciiVtu {
+  std::string points;       // "x y z  x y z ..."
+  std::string connectivity; // "0 1 2 3 ..."
+  std::string offsets;
+  std::string types;
+  std::string point_data; // <DataArray> elements
+  std::string cell_data;
+  std::string field_data;
+  int num_points = 0;
+  int num_cells = 0;
+
+  std::string text() const {
+    std::ostringstream s;
+    s << "<?xml version=\"1.0\"?>\n"
+         "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+         "header_type=\"UInt64\">\n<UnstructuredGrid>\n";
+    if (!field_data.empty())
+      s << "<FieldData>" << field_data << "</FieldData>\n";
+    s << "<Piece NumberOfPoints=\"" << num_points << "\" NumberOfCells=\"" << num_cells
+      << "\">\n<PointData>" << point_data << "</PointData>\n<CellData>" << cell_data
+      << "</CellData>\n<Points><DataArray type=\"Float64\" Name=\"Points\" "
+         "NumberOfComponents=\"3\" format=\"ascii\">"
+      << points
+      << "</DataArray></Points>\n<Cells>\n"
+         "<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
+      << connectivity
+      << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">" << offsets
+      << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">" << types
+      << "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+    return s.str();
+  }
+};
+
+std::string ascii_array(const std::string &type, const std::string &name, int components,
+                        const std::string &values) {
+  return "<DataArray type=\"" + type + "\" Name=\"" + name + "\" NumberOfComponents=\"" +
+         std::to_string(components) + "\" format=\"ascii\">" + values + "</DataArray>\n";
+}
+
+const std::string kSpatialDimension4 =
+    "<DataArray type=\"Int32\" Name=\"SpatialDimension\" NumberOfTuples=\"1\" "
+    "format=\"ascii\">4</DataArray>";
+
+// One pentatope (5 points) in the 4D convention, with `cells` as given.
+AsciiVtu pentatope_file() {
+  AsciiVtu f;
+  f.num_points = 5;
+  f.points = "0 0 0  1 0 0  0 1 0  0 0 1  0 0 0";
+  f.point_data = ascii_array("Float64", "t", 1, "0 0 0 0 1");
+  f.field_data = kSpatialDimension4;
+  f.num_cells = 1;
+  f.connectivity = "0 1 2 3 4";
+  f.offsets = "5";
+  f.types = "2";
+  return f;
+}
+
+} // namespace
+
+TEST_CASE("vtu: 3D round trip preserves coordinates, cells and arrays exactly", "[io][3d]") {
+  TempDir dir;
+  const Mesh m = two_tets();
+  write_mesh(dir.file("m.vtu"), m);
+  const Mesh back = read_mesh(dir.file("m.vtu"));
+  require_same(m, back);
+  CHECK(back.stage.empty());
+}
+
+TEST_CASE("vtu: 2D mesh comes back 2D", "[io][2d]") {
+  TempDir dir;
+  Mesh m;
+  m.dim = 2;
+  m.coords = {0, 0, 1, 0, 0.1, 0.7, 1, 1};
+  m.cells = {0, 1, 2, 2, 1, 3};
+  m.cell_data.push_back({"gmsh:physical", 1, {1, 2}});
+  write_vtu(dir.file("m.vtu"), m);
+  require_same(m, read_vtu(dir.file("m.vtu")));
+}
+
+TEST_CASE("vtu: 4D round trip through the t array", "[io][4d]") {
+  TempDir dir;
+  Mesh m;
+  m.dim = 4;
+  m.coords = {0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0.3, 1, 1, 1, 1.0 / 3.0};
+  m.cells = {0, 1, 2, 3, 4, 5, 4, 3, 2, 1};
+  m.point_data.push_back({"u", 1, {1, 2, 3, 4, 5, 6}});
+  m.cell_data.push_back({"level", 1, {0, 1}});
+  write_mesh(dir.file("m.vtu"), m);
+  const Mesh back = read_mesh(dir.file("m.vtu"));
+  require_same(m, back); // "t" became the 4th coordinate, not a point array
+}
+
+TEST_CASE("vtu: written file is zlib-compressed inline binary with 64-bit headers", "[io]") {
+  TempDir dir;
+  write_vtu(dir.file("m.vtu"), two_tets());
+  const std::string text = read_text(dir.file("m.vtu"));
+  CHECK(text.find("compressor=\"vtkZLibDataCompressor\"") != std::string::npos);
+  CHECK(text.find("header_type=\"UInt64\"") != std::string::npos);
+  CHECK(text.find("format=\"binary\"") != std::string::npos);
+  CHECK(text.find("AppendedData") == std::string::npos);
+  // Integer cell arrays stay integers; the others are Float64.
+  CHECK(text.find("type=\"Int32\" Name=\"region\"") != std::string::npos);
+  CHECK(text.find("type=\"Float64\" Name=\"quality\"") != std::string::npos);
+  CHECK(text.find("type=\"Int64\" Name=\"connectivity\"") != std::string::npos);
+}
+
+TEST_CASE("vtu: lower-dimensional cells are ignored and unused points dropped", "[io][3d]") {
+  TempDir dir;
+  AsciiVtu f;
+  // Point 0 and 6 are used only by a vertex and a line: they are dropped.
+  f.num_points = 7;
+  f.points = "9 9 9  0 0 0  1 0 0  0 1 0  0 0 1  1 1 1  8 8 8";
+  f.point_data = ascii_array("Float32", "p", 1, "0 10 20 30 40 50 60") +
+                 ascii_array("Int16", "q", 2, "0 0 1 1 2 2 3 3 4 4 5 5 6 6");
+  f.num_cells = 5;
+  f.connectivity = "0  0 6  1 2 3  1 2 3 4  5 4 3 2";
+  f.offsets = "1 3 6 10 14";
+  f.types = "1 3 5 10 10";
+  f.cell_data = ascii_array("Int32", "id", 1, "100 101 102 103 104");
+  write_text(dir.file("lower.vtu"), f.text());
+
+  const Mesh m = read_mesh(dir.file("lower.vtu"));
+  REQUIRE(m.dim == 3);
+  REQUIRE(m.num_vertices() == 5);
+  CHECK(m.coords == std::vector<double>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1});
+  CHECK(m.cells == std::vector<VertexId>{0, 1, 2, 3, 4, 3, 2, 1});
+  REQUIRE(m.point_data.size() == 2);
+  CHECK(m.point_data[0].values == std::vector<double>{10, 20, 30, 40, 50});
+  CHECK(m.point_data[1].components == 2);
+  CHECK(m.point_data[1].values == std::vector<double>{1, 1, 2, 2, 3, 3, 4, 4, 5, 5});
+  REQUIRE(m.cell_data.size() == 1);
+  CHECK(m.cell_data[0].values == std::vector<double>{103, 104});
+}
+
+TEST_CASE("vtu: triangles off the plane z = 0 are rejected", "[io][2d]") {
+  TempDir dir;
+  AsciiVtu f;
+  f.num_points = 3;
+  f.points = "0 0 0  1 0 0  0 1 0.5";
+  f.num_cells = 1;
+  f.connectivity = "0 1 2";
+  f.offsets = "3";
+  f.types = "5";
+  write_text(dir.file("surface.vtu"), f.text());
+  require_clean_read_error(dir.file("surface.vtu"), "surface mesh in 3D not supported");
+}
+
+TEST_CASE("vtu: 4D file without t array is rejected naming t", "[io][4d]") {
+  TempDir dir;
+  AsciiVtu f = pentatope_file();
+  f.point_data = ascii_array("Float64", "time", 1, "0 0 0 0 1");
+  write_text(dir.file("no_t.vtu"), f.text());
+  require_clean_read_error(dir.file("no_t.vtu"), "'t'");
+
+  f.point_data = ascii_array("Float64", "t", 2, "0 0  0 0  0 0  0 0  1 1");
+  write_text(dir.file("t2.vtu"), f.text());
+  require_clean_read_error(dir.file("t2.vtu"), "'t' has 2 components");
+}
+
+TEST_CASE("vtu: 4D file with 4-vertex cells is rejected", "[io][4d]") {
+  TempDir dir;
+  AsciiVtu f = pentatope_file();
+  f.num_cells = 2;
+  f.connectivity = "0 1 2 3 4  0 1 2 3";
+  f.offsets = "5 9";
+  f.types = "2 2";
+  write_text(dir.file("four.vtu"), f.text());
+  require_clean_read_error(dir.file("four.vtu"), "cell 1 has 4 vertices, expected 5");
+}
+
+TEST_CASE("vtu: 4D convex point sets are read as pentatopes", "[io][4d]") {
+  TempDir dir;
+  AsciiVtu f = pentatope_file();
+  f.types = "41";
+  write_text(dir.file("cps.vtu"), f.text());
+  const Mesh m = read_vtu(dir.file("cps.vtu"));
+  REQUIRE(m.dim == 4);
+  CHECK(m.cells == std::vector<VertexId>{0, 1, 2, 3, 4});
+  CHECK(m.coords[4 * 4 + 3] == 1.0);
+  CHECK(m.point_data.empty());
+}
+
+TEST_CASE("vtu: hexahedra mixed with tetrahedra are rejected", "[io][3d]") {
+  TempDir dir;
+  AsciiVtu f;
+  f.num_points = 8;
+  f.points = "0 0 0  1 0 0  1 1 0  0 1 0  0 0 1  1 0 1  1 1 1  0 1 1";
+  f.num_cells = 2;
+  f.connectivity = "0 1 3 4  0 1 2 3 4 5 6 7";
+  f.offsets = "4 12";
+  f.types = "10 12";
+  write_text(dir.file("hex.vtu"), f.text());
+  require_clean_read_error(dir.file("hex.vtu"), "mixed non-simplex cells (VTK type 12)");
+}
+
+TEST_CASE("vtu: a file of quadrilaterals has no triangles or tetrahedra", "[io]") {
+  TempDir dir;
+  AsciiVtu f;
+  f.num_points = 4;
+  f.points = "0 0 0  1 0 0  1 1 0  0 1 0";
+  f.num_cells = 1;
+  f.connectivity = "0 1 2 3";
+  f.offsets = "4";
+  f.types = "9";
+  write_text(dir.file("quad.vtu"), f.text());
+  require_clean_read_error(dir.file("quad.vtu"), "no triangles or tetrahedra");
+}
+
+TEST_CASE("vtu: point ids out of range are rejected", "[io][2d]") {
+  TempDir dir;
+  AsciiVtu f;
+  f.num_points = 3;
+  f.points = "0 0 0  1 0 0  0 1 0";
+  f.num_cells = 1;
+  f.connectivity = "0 1 7";
+  f.offsets = "3";
+  f.types = "5";
+  write_text(dir.file("range.vtu"), f.text());
+  Failure fail = capture_failure([&] { read_vtu(dir.file("range.vtu")); });
+  INFO(fail.message);
+  REQUIRE(fail.threw);
+  CHECK(fail.message.find("range.vtu") != std::string::npos);
+  CHECK(fail.stderr_text.empty());
+}
+
+TEST_CASE("vtu: a non-finite coordinate is rejected naming the point", "[io][3d]") {
+  TempDir dir;
+  Mesh m = two_tets();
+  m.coords[3 * 3 + 1] = std::numeric_limits<double>::quiet_NaN();
+  write_vtu(dir.file("nan.vtu"), m);
+  require_clean_read_error(dir.file("nan.vtu"), "point 3");
+}
+
+TEST_CASE("vtu: array with the wrong tuple count is rejected naming it", "[io][3d]") {
+  TempDir dir;
+  AsciiVtu f;
+  f.num_points = 4;
+  f.points = "0 0 0  1 0 0  0 1 0  0 0 1";
+  f.num_cells = 1;
+  f.connectivity = "0 1 2 3";
+  f.offsets = "4";
+  f.types = "10";
+  f.point_data = ascii_array("Float64", "short_array", 1, "1 2 3");
+  write_text(dir.file("short.vtu"), f.text());
+  require_clean_read_error(dir.file("short.vtu"), "short_array");
+}
+
+TEST_CASE("vtu: broken zlib stream gives one clean error", "[io]") {
+  TempDir dir;
+  write_vtu(dir.file("zlib.vtu"), two_tets());
+  std::string text = read_text(dir.file("zlib.vtu"));
+  // Flip a base64 character near the end of the connectivity data, inside
+  // the deflate stream (the adler32 check then fails).
+  const std::size_t array = text.find("Name=\"connectivity\"");
+  REQUIRE(array != std::string::npos);
+  std::size_t end = text.find("</DataArray>", array);
+  REQUIRE(end != std::string::npos);
+  while (end > 0 && std::isspace(static_cast<unsigned char>(text[end - 1])))
+    --end;
+  while (text[end - 1] == '=')
+    --end;
+  char &c = text[end - 3];
+  c = c == 'A' ? 'B' : 'A';
+  write_text(dir.file("zlib.vtu"), text);
+  require_clean_read_error(dir.file("zlib.vtu"), "Zlib");
+}
+
+TEST_CASE("vtu: truncated file gives one clean error", "[io]") {
+  TempDir dir;
+  write_vtu(dir.file("cut.vtu"), two_tets());
+  const std::string text = read_text(dir.file("cut.vtu"));
+  write_text(dir.file("cut.vtu"), text.substr(0, text.size() / 2));
+  require_clean_read_error(dir.file("cut.vtu"), "");
+}
+
+TEST_CASE("vtu: truncated raw appended data gives one clean error", "[io]") {
+  // A valid raw-appended file (uncompressed, UInt64 block sizes), then cut.
+  std::string raw;
+  auto put = [&](const void *p, std::size_t n) { raw.append(static_cast<const char *>(p), n); };
+  const double pts[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  const std::int64_t conn[4] = {0, 1, 2, 3}, offs[1] = {4};
+  const std::uint8_t types[1] = {10};
+  std::uint64_t n = sizeof pts;
+  put(&n, 8), put(pts, sizeof pts);
+  n = sizeof conn;
+  put(&n, 8), put(conn, sizeof conn);
+  n = sizeof offs;
+  put(&n, 8), put(offs, sizeof offs);
+  n = sizeof types;
+  put(&n, 8), put(types, sizeof types);
+  const std::string head =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+      "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n"
+      "<Piece NumberOfPoints=\"4\" NumberOfCells=\"1\">\n"
+      "<Points><DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" "
+      "format=\"appended\" offset=\"0\"/></Points>\n<Cells>\n"
+      "<DataArray type=\"Int64\" Name=\"connectivity\" format=\"appended\" offset=\"104\"/>\n"
+      "<DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" offset=\"144\"/>\n"
+      "<DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"160\"/>\n"
+      "</Cells>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_";
+  const std::string tail = "\n</AppendedData>\n</VTKFile>\n";
+  TempDir dir;
+  write_text(dir.file("appended.vtu"), head + raw + tail);
+  const Mesh m = read_vtu(dir.file("appended.vtu")); // the intact file reads
+  CHECK(m.dim == 3);
+  CHECK(m.num_cells() == 1);
+  write_text(dir.file("appended.vtu"), head + raw.substr(0, 60));
+  require_clean_read_error(dir.file("appended.vtu"), "");
+}
+
+TEST_CASE("vtu: file without a Piece is rejected cleanly", "[io]") {
+  TempDir dir;
+  write_text(dir.file("nopiece.vtu"),
+             "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+             "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n"
+             "</UnstructuredGrid>\n</VTKFile>\n");
+  require_clean_read_error(dir.file("nopiece.vtu"), "");
+}
+
+TEST_CASE("vtu: XML that is not a VTK file is rejected cleanly", "[io]") {
+  TempDir dir;
+  write_text(dir.file("junk.vtu"), "this is <not> xml &&& at all\n");
+  require_clean_read_error(dir.file("junk.vtu"), "");
+}
+
+TEST_CASE("io: directory given as mesh is rejected", "[io]") {
+  TempDir dir;
+  fs::create_directory(dir.path / "mesh.vtu");
+  require_clean_read_error(dir.file("mesh.vtu"), "is a directory");
+}
+
+TEST_CASE("io: missing file is rejected", "[io]") {
+  TempDir dir;
+  require_clean_read_error(dir.file("absent.vtu"), "cannot open");
+}
+
+TEST_CASE("io: empty file is rejected", "[io]") {
+  TempDir dir;
+  write_text(dir.file("empty.vtu"), "");
+  require_clean_read_error(dir.file("empty.vtu"), "empty file");
+}
+
+TEST_CASE("io: unknown extension is rejected", "[io]") {
+  TempDir dir;
+  write_text(dir.file("mesh.stl"), "solid x\n");
+  require_clean_read_error(dir.file("mesh.stl"), "unknown mesh format '.stl'");
+  Failure f = capture_failure([&] { write_mesh(dir.file("out.obj"), two_tets()); });
+  REQUIRE(f.threw);
+  CHECK(f.message.find("unknown mesh format '.obj'") != std::string::npos);
+  CHECK(!fs::exists(dir.file("out.obj")));
+}
+
+TEST_CASE("io: extension is case-insensitive", "[io]") {
+  TempDir dir;
+  write_mesh(dir.file("MESH.VTU"), two_tets());
+  require_same(two_tets(), read_mesh(dir.file("MESH.VTU")));
+}
+
+TEST_CASE("io: failed write leaves no file behind", "[io]") {
+  TempDir dir;
+  // The directory does not exist: the temporary file cannot be created.
+  Failure f = capture_failure([&] { write_mesh(dir.file("missing/out.vtu"), two_tets()); });
+  INFO(f.message);
+  REQUIRE(f.threw);
+  CHECK(f.message.find("out.vtu") != std::string::npos);
+  CHECK(f.message.find("cannot write") != std::string::npos);
+  CHECK(f.message.find(".tmp") == std::string::npos);
+  CHECK(f.stderr_text.empty());
+
+  // The target is a directory: writing succeeds, the final rename fails.
+  fs::create_directory(dir.path / "taken.vtu");
+  f = capture_failure([&] { write_mesh(dir.file("taken.vtu"), two_tets()); });
+  INFO(f.message);
+  REQUIRE(f.threw);
+  CHECK(dir.entries() == std::vector<std::string>{"taken.vtu"});
+  CHECK(fs::is_directory(dir.path / "taken.vtu"));
+
+  // An inconsistent mesh is an internal error, reported against the target.
+  Mesh bad = two_tets();
+  bad.cells[5] = 99;
+  try {
+    write_mesh(dir.file("bad.vtu"), bad);
+    FAIL("no error for a cell referring to vertex 99");
+  } catch (const CheckError &e) {
+    CHECK(std::string(e.what()).rfind(dir.file("bad.vtu") + ": cannot write", 0) == 0);
+  }
+  CHECK(dir.entries() == std::vector<std::string>{"taken.vtu"});
+}
+
+TEST_CASE("io: write_mesh replaces an existing file and leaves no temporary", "[io]") {
+  TempDir dir;
+  write_text(dir.file("m.vtu"), "old contents");
+  write_mesh(dir.file("m.vtu"), two_tets());
+  CHECK(dir.entries() == std::vector<std::string>{"m.vtu"});
+  require_same(two_tets(), read_mesh(dir.file("m.vtu")));
+}
