@@ -296,32 +296,49 @@ struct FacetReport {
   std::string overlap;             // first folded pair, e.g. "cells 5 and 9 overlap across facet (1, 2, 3)"
 };
 
-// Across an interior facet the two opposite vertices must lie on opposite
-// sides of the facet's hyperplane: the orientation determinants (facet
-// vertices in key order, then the opposite vertex) have opposite signs.
-template <int Dim> FacetReport facet_pass(const Mesh &mesh, bool keep_boundary) {
+// Side of the facet's hyperplane on which the opposite vertex of facet m of
+// cell c lies, i.e. the sign of orient(facet ids sorted, opposite vertex).
+// That tuple is a permutation of the cell's tuple, so the sign is the cell's
+// orientation times the permutation's parity: moving the opposite vertex from
+// local position j to the end takes Dim - j transpositions, sorting the rest
+// one per inversion. No geometry beyond the cell's own sign is needed.
+template <int Dim> int facet_side(const Mesh &mesh, CellId c, int m, int cell_sign) {
+  const VertexId *cell = mesh.cell(c);
+  const int j = opposite_of_facet<Dim>(m);
+  std::array<VertexId, Dim> rest;
+  for (int i = 0, k = 0; i <= Dim; ++i)
+    if (i != j) rest[k++] = cell[i];
+  int parity = Dim - j;
+  for (int i = 0; i < Dim; ++i)
+    for (int k = i + 1; k < Dim; ++k) parity += rest[i] > rest[k];
+  return parity % 2 ? -cell_sign : cell_sign;
+}
+
+// One walk over the distinct facets. With `signs` (per-cell orientation,
+// 0 for degenerate cells) it also checks that across every interior facet
+// the two opposite vertices lie on opposite sides of the facet's hyperplane.
+template <int Dim>
+FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs, bool keep_boundary) {
   constexpr int M = Dim + 1;
   FacetReport r;
-  double pts[(Dim + 1) * Dim];
+  double pts[Dim * Dim];
   for_each_subsimplex<Dim, Dim>(mesh, [&](const std::array<VertexId, Dim> &key,
                                           const std::uint32_t *refs, int count) {
     ++r.facets;
-    gather<Dim>(mesh, key.data(), Dim, pts);
     if (count == 1) {
       ++r.boundary_facets;
+      gather<Dim>(mesh, key.data(), Dim, pts);
       r.boundary_measure += facet_measure<Dim>(pts);
       if (keep_boundary) r.boundary.insert(r.boundary.end(), key.begin(), key.end());
     } else if (count == 2) {
-      if (!r.overlap.empty()) return;
-      double side[2];
+      if (!signs || !r.overlap.empty()) return;
+      int side[2];
       CellId cells[2];
       for (int s = 0; s < 2; ++s) {
         cells[s] = CellId(refs[s] / M);
-        const VertexId o = mesh.cell(cells[s])[opposite_of_facet<Dim>(int(refs[s] % M))];
-        gather<Dim>(mesh, &o, 1, pts + Dim * Dim);
-        side[s] = signed_volume(pts, Dim);
+        side[s] = facet_side<Dim>(mesh, cells[s], int(refs[s] % M), (*signs)[cells[s]]);
       }
-      if ((side[0] > 0 && side[1] > 0) || (side[0] < 0 && side[1] < 0))
+      if (side[0] != 0 && side[0] == side[1])
         r.overlap = "cells " + std::to_string(cells[0]) + " and " + std::to_string(cells[1]) +
                     " overlap across facet " + id_list(key);
     } else if (r.nonmanifold.empty()) {
@@ -356,17 +373,23 @@ std::string check_shape(const Mesh &mesh) {
   return {};
 }
 
-// Sum of |volume|; `first_degenerate` set to the first degenerate cell.
-template <int Dim> double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_volume) {
+// Sum of |volume|; `first_degenerate` set to the first degenerate cell (or
+// -1); `signs`, when given, receives each cell's orientation (0 if degenerate).
+template <int Dim>
+double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_volume,
+                 std::vector<std::int8_t> *signs = nullptr) {
   const std::size_t nc = mesh.num_cells();
   double pts[(Dim + 1) * Dim];
   double total = 0;
   first_degenerate = std::size_t(-1);
+  if (signs) signs->assign(nc, 0);
   for (std::size_t c = 0; c < nc; ++c) {
     gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
     const double v = signed_volume(pts, Dim);
     total += std::abs(v);
-    if (first_degenerate == std::size_t(-1) && degenerate<Dim>(pts, v)) {
+    const bool bad = degenerate<Dim>(pts, v);
+    if (signs && !bad) (*signs)[c] = v > 0 ? 1 : -1;
+    if (bad && first_degenerate == std::size_t(-1)) {
       first_degenerate = c;
       its_volume = v;
     }
@@ -532,7 +555,7 @@ Invariants measure_invariants(const Mesh &mesh) {
     std::size_t bad;
     double bad_volume = 0;
     inv.volume = cell_pass<D>(mesh, bad, bad_volume);
-    const FacetReport fr = facet_pass<D>(mesh, false);
+    const FacetReport fr = facet_pass<D>(mesh, nullptr, false);
     inv.boundary_measure = fr.boundary_measure;
     inv.boundary_facets = fr.boundary_facets;
     inv.euler = euler_characteristic<D>(mesh, fr.facets);
@@ -547,13 +570,14 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original) {
   return dispatch(mesh.dim, [&]<int D>() {
     std::size_t bad;
     double bad_volume = 0;
-    const double volume = cell_pass<D>(mesh, bad, bad_volume);
+    std::vector<std::int8_t> signs;
+    const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
     if (bad != std::size_t(-1)) {
       char buf[64];
       std::snprintf(buf, sizeof buf, "%g", bad_volume);
       return fail("cell " + std::to_string(bad) + " is degenerate (volume " + buf + ")");
     }
-    const FacetReport fr = facet_pass<D>(mesh, true);
+    const FacetReport fr = facet_pass<D>(mesh, &signs, true);
     if (!fr.nonmanifold.empty()) return fail(fr.nonmanifold);
     if (!fr.overlap.empty()) return fail(fr.overlap);
     if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty()) return fail(s);
@@ -594,9 +618,10 @@ void prepare_input(Mesh &mesh, const std::string &path) {
   dispatch(mesh.dim, [&]<int D>() {
     std::size_t bad;
     double bad_volume = 0;
-    cell_pass<D>(mesh, bad, bad_volume);
+    std::vector<std::int8_t> signs;
+    cell_pass<D>(mesh, bad, bad_volume, &signs);
     if (bad != std::size_t(-1)) throw InputError(path, "cell " + std::to_string(bad) + " has zero volume");
-    const FacetReport fr = facet_pass<D>(mesh, true);
+    const FacetReport fr = facet_pass<D>(mesh, &signs, true);
     if (!fr.nonmanifold.empty()) {
       // "facet (a, b) is shared by 3 cells" -> "non-manifold: facet (a, b) shared by 3 cells"
       std::string s = fr.nonmanifold;
@@ -607,12 +632,8 @@ void prepare_input(Mesh &mesh, const std::string &path) {
     if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
       throw InputError(path, "non-conforming input: " + s);
     // Orient every cell positively (a negatively oriented cell is not an error).
-    double pts[(D + 1) * D];
-    for (std::size_t c = 0; c < nc; ++c) {
-      VertexId *cell = mesh.cell(CellId(c));
-      gather<D>(mesh, cell, D + 1, pts);
-      if (signed_volume(pts, D) < 0) std::swap(cell[0], cell[1]);
-    }
+    for (std::size_t c = 0; c < nc; ++c)
+      if (signs[c] < 0) std::swap(mesh.cell(CellId(c))[0], mesh.cell(CellId(c))[1]);
   });
 }
 
