@@ -67,13 +67,15 @@ constexpr double kRadiusSlack = 1e-10;
 
 template <int M> double dist2(const double *a, const double *b) {
   double s = 0;
-  for (int k = 0; k < M; ++k) s += (a[k] - b[k]) * (a[k] - b[k]);
+  for (int k = 0; k < M; ++k)
+    s += (a[k] - b[k]) * (a[k] - b[k]);
   return s;
 }
 
 template <int M> double dot(const double *a, const double *b) {
   double s = 0;
-  for (int k = 0; k < M; ++k) s += a[k] * b[k];
+  for (int k = 0; k < M; ++k)
+    s += a[k] * b[k];
   return s;
 }
 
@@ -90,7 +92,8 @@ template <int M> double box_dist2(const double *p, const double *lo, const doubl
 
 // Bounding box of n points.
 template <int M> void point_bbox(const double *pts, int n, double *lo, double *hi) {
-  for (int k = 0; k < M; ++k) lo[k] = hi[k] = pts[k];
+  for (int k = 0; k < M; ++k)
+    lo[k] = hi[k] = pts[k];
   for (int i = 1; i < n; ++i)
     for (int k = 0; k < M; ++k) {
       lo[k] = std::min(lo[k], pts[i * M + k]);
@@ -107,36 +110,46 @@ template <int M> double face_dist2(const double *p, const double *pts, const int
   double e[M][M], w[M], L[M][M], lam[M];
   const double *x0 = pts + idx[0] * M;
   for (int i = 0; i < k; ++i)
-    for (int a = 0; a < M; ++a) e[i][a] = pts[idx[i + 1] * M + a] - x0[a];
-  for (int a = 0; a < M; ++a) w[a] = p[a] - x0[a];
+    for (int a = 0; a < M; ++a)
+      e[i][a] = pts[idx[i + 1] * M + a] - x0[a];
+  for (int a = 0; a < M; ++a)
+    w[a] = p[a] - x0[a];
   for (int j = 0; j < k; ++j) {
     const double g = dot<M>(e[j], e[j]);
     double s = g;
-    for (int q = 0; q < j; ++q) s -= L[j][q] * L[j][q];
-    if (!(s > kDependent * g)) return -1;
+    for (int q = 0; q < j; ++q)
+      s -= L[j][q] * L[j][q];
+    if (!(s > kDependent * g))
+      return -1;
     L[j][j] = std::sqrt(s);
     for (int i = j + 1; i < k; ++i) {
       double t = dot<M>(e[i], e[j]);
-      for (int q = 0; q < j; ++q) t -= L[i][q] * L[j][q];
+      for (int q = 0; q < j; ++q)
+        t -= L[i][q] * L[j][q];
       L[i][j] = t / L[j][j];
     }
   }
   for (int j = 0; j < k; ++j) { // L y = b
     double t = dot<M>(e[j], w);
-    for (int q = 0; q < j; ++q) t -= L[j][q] * lam[q];
+    for (int q = 0; q < j; ++q)
+      t -= L[j][q] * lam[q];
     lam[j] = t / L[j][j];
   }
   double sum = 0;
   for (int j = k - 1; j >= 0; --j) { // L^T lambda = y
     double t = lam[j];
-    for (int q = j + 1; q < k; ++q) t -= L[q][j] * lam[q];
+    for (int q = j + 1; q < k; ++q)
+      t -= L[q][j] * lam[q];
     lam[j] = t / L[j][j];
-    if (lam[j] < -kBary) return -1;
+    if (lam[j] < -kBary)
+      return -1;
     sum += lam[j];
   }
-  if (sum > 1 + kBary) return -1; // lambda_0 = 1 - sum < 0
+  if (sum > 1 + kBary)
+    return -1; // lambda_0 = 1 - sum < 0
   for (int j = 0; j < k; ++j)
-    for (int a = 0; a < M; ++a) w[a] -= lam[j] * e[j][a];
+    for (int a = 0; a < M; ++a)
+      w[a] -= lam[j] * e[j][a];
   return dot<M>(w, w);
 }
 
@@ -149,16 +162,20 @@ template <int M> double face_dist2(const double *p, const double *pts, const int
 template <int M> bool hull_within(const double *p, const double *pts, int n, double r2) {
   assert(n <= kMaxHullPoints);
   for (int i = 0; i < n; ++i)
-    if (dist2<M>(p, pts + i * M) <= r2) return true;
+    if (dist2<M>(p, pts + i * M) <= r2)
+      return true;
   int idx[kMaxHullPoints];
   for (unsigned mask = 3; mask < (1u << n); ++mask) {
     const int size = std::popcount(mask);
-    if (size < 2 || size > M + 1) continue;
+    if (size < 2 || size > M + 1)
+      continue;
     int m = 0;
     for (int i = 0; i < n; ++i)
-      if (mask & (1u << i)) idx[m++] = i;
+      if (mask & (1u << i))
+        idx[m++] = i;
     const double d2 = face_dist2<M>(p, pts, idx, size - 1);
-    if (d2 >= 0 && d2 <= r2) return true;
+    if (d2 >= 0 && d2 <= r2)
+      return true;
   }
   return false;
 }
@@ -174,11 +191,14 @@ bool hull_meets_sphere(const double *c, double r2lo, double r2hi, const double *
     dmin = std::min(dmin, d);
     dmax = std::max(dmax, d);
   }
-  if (dmax < r2lo) return false; // strictly inside the ball
-  if (dmin <= r2hi) return true; // points on both sides
-  double lo[M], hi[M];           // all points outside: does the ball reach the hull?
+  if (dmax < r2lo)
+    return false; // strictly inside the ball
+  if (dmin <= r2hi)
+    return true;       // points on both sides
+  double lo[M], hi[M]; // all points outside: does the ball reach the hull?
   point_bbox<M>(pts, n, lo, hi);
-  if (box_dist2<M>(c, lo, hi) > r2hi) return false;
+  if (box_dist2<M>(c, lo, hi) > r2hi)
+    return false;
   return hull_within<M>(c, pts, n, r2hi);
 }
 
@@ -186,7 +206,8 @@ bool hull_meets_sphere(const double *c, double r2lo, double r2hi, const double *
 template <int M> bool hull_meets_ball(const double *c, double r2hi, const double *pts, int n) {
   double lo[M], hi[M];
   point_bbox<M>(pts, n, lo, hi);
-  if (box_dist2<M>(c, lo, hi) > r2hi) return false;
+  if (box_dist2<M>(c, lo, hi) > r2hi)
+    return false;
   return hull_within<M>(c, pts, n, r2hi);
 }
 
@@ -204,15 +225,19 @@ template <int D> bool simplex_meets_box(const double *verts, const double *lo, c
     scale = std::max(scale, 0.5 * (hi[k] - lo[k]));
   }
   for (int i = 0; i < N; ++i)
-    for (int k = 0; k < D; ++k) scale = std::max(scale, std::abs(verts[i * D + k] - ctr[k]));
-  if (!(scale > 0)) return true; // everything is one point
+    for (int k = 0; k < D; ++k)
+      scale = std::max(scale, std::abs(verts[i * D + k] - ctr[k]));
+  if (!(scale > 0))
+    return true; // everything is one point
 
   double T[R][C + 1] = {};
   int basis[R];
-  for (int i = 0; i < N; ++i) T[0][i] = 1;
+  for (int i = 0; i < N; ++i)
+    T[0][i] = 1;
   T[0][C] = 1;
   for (int k = 0; k < D; ++k) {
-    for (int i = 0; i < N; ++i) T[1 + 2 * k][i] = T[2 + 2 * k][i] = (verts[i * D + k] - ctr[k]) / scale;
+    for (int i = 0; i < N; ++i)
+      T[1 + 2 * k][i] = T[2 + 2 * k][i] = (verts[i * D + k] - ctr[k]) / scale;
     T[1 + 2 * k][N + 2 * k] = 1;
     T[2 + 2 * k][N + 2 * k + 1] = -1;
     T[1 + 2 * k][C] = (hi[k] - ctr[k]) / scale;
@@ -220,7 +245,8 @@ template <int D> bool simplex_meets_box(const double *verts, const double *lo, c
   }
   for (int r = 0; r < R; ++r) {
     if (T[r][C] < 0)
-      for (int j = 0; j <= C; ++j) T[r][j] = -T[r][j];
+      for (int j = 0; j <= C; ++j)
+        T[r][j] = -T[r][j];
     T[r][S + r] = 1;
     basis[r] = S + r;
   }
@@ -228,34 +254,43 @@ template <int D> bool simplex_meets_box(const double *verts, const double *lo, c
   double cost[C + 1] = {};
   for (int j = 0; j <= C; ++j)
     if (j < S || j == C)
-      for (int r = 0; r < R; ++r) cost[j] -= T[r][j];
+      for (int r = 0; r < R; ++r)
+        cost[j] -= T[r][j];
 
   constexpr double kPivot = 1e-11;
   for (int iter = 0; iter < 100; ++iter) {
     int enter = -1;
     for (int j = 0; j < C && enter < 0; ++j)
-      if (cost[j] < -kPivot) enter = j;
-    if (enter < 0) break;
+      if (cost[j] < -kPivot)
+        enter = j;
+    if (enter < 0)
+      break;
     int leave = -1;
     double best = kInf;
     for (int r = 0; r < R; ++r) {
-      if (T[r][enter] <= kPivot) continue;
+      if (T[r][enter] <= kPivot)
+        continue;
       const double ratio = T[r][C] / T[r][enter];
-      if (ratio < best - 1e-14 || (ratio <= best + 1e-14 && basis[r] < basis[leave])) {
+      if (leave < 0 || ratio < best - 1e-14 || (ratio <= best + 1e-14 && basis[r] < basis[leave])) {
         best = ratio;
         leave = r;
       }
     }
-    if (leave < 0) break; // cannot happen: the objective is bounded below by 0
+    if (leave < 0)
+      break; // cannot happen: the objective is bounded below by 0
     const double piv = T[leave][enter];
-    for (int j = 0; j <= C; ++j) T[leave][j] /= piv;
+    for (int j = 0; j <= C; ++j)
+      T[leave][j] /= piv;
     for (int r = 0; r < R; ++r) {
-      if (r == leave || T[r][enter] == 0) continue;
+      if (r == leave || T[r][enter] == 0)
+        continue;
       const double f = T[r][enter];
-      for (int j = 0; j <= C; ++j) T[r][j] -= f * T[leave][j];
+      for (int j = 0; j <= C; ++j)
+        T[r][j] -= f * T[leave][j];
     }
     const double f = cost[enter];
-    for (int j = 0; j <= C; ++j) cost[j] -= f * T[leave][j];
+    for (int j = 0; j <= C; ++j)
+      cost[j] -= f * T[leave][j];
     basis[leave] = enter;
   }
   // Also reached (conservatively "yes") if the iteration cap were ever hit
@@ -292,7 +327,8 @@ private:
 
 template <int D> class HemisphereRegion final : public Region {
 public:
-  HemisphereRegion(const std::vector<double> &c, double r, const std::vector<double> &n, double offset)
+  HemisphereRegion(const std::vector<double> &c, double r, const std::vector<double> &n,
+                   double offset)
       : r_(r), offset_(offset) {
     std::copy(c.begin(), c.end(), c_);
     std::copy(n.begin(), n.end(), n_);
@@ -307,19 +343,25 @@ public:
       s[i] = dot<D>(verts + i * D, n_) - offset_;
       inside += s[i] >= 0;
     }
-    if (inside == 0) return false;
-    if (inside == D + 1) return hull_meets_sphere<D>(c_, r2lo_, r2hi_, verts, D + 1);
+    if (inside == 0)
+      return false;
+    if (inside == D + 1)
+      return hull_meets_sphere<D>(c_, r2lo_, r2hi_, verts, D + 1);
     // Clip: the vertices inside, and where the edges cross the plane.
     double pts[kMaxHullPoints * D];
     int n = 0;
     for (int i = 0; i <= D; ++i)
-      if (s[i] >= 0) std::copy(verts + i * D, verts + i * D + D, pts + D * n++);
+      if (s[i] >= 0)
+        std::copy(verts + i * D, verts + i * D + D, pts + D * n++);
     for (int i = 0; i <= D; ++i) {
-      if (!(s[i] > 0)) continue;
+      if (!(s[i] > 0))
+        continue;
       for (int j = 0; j <= D; ++j) {
-        if (!(s[j] < 0)) continue;
+        if (!(s[j] < 0))
+          continue;
         const double t = s[i] / (s[i] - s[j]);
-        for (int k = 0; k < D; ++k) pts[D * n + k] = verts[i * D + k] + t * (verts[j * D + k] - verts[i * D + k]);
+        for (int k = 0; k < D; ++k)
+          pts[D * n + k] = verts[i * D + k] + t * (verts[j * D + k] - verts[i * D + k]);
         ++n;
       }
     }
@@ -339,8 +381,10 @@ public:
     }
     if (nonzero == 1) {
       const double cut = offset_ / n_[axis];
-      if (n_[axis] > 0) lo[axis] = std::max(lo[axis], cut);
-      else hi[axis] = std::min(hi[axis], cut);
+      if (n_[axis] > 0)
+        lo[axis] = std::max(lo[axis], cut);
+      else
+        hi[axis] = std::min(hi[axis], cut);
     }
   }
 
@@ -359,11 +403,14 @@ public:
     double lo[D], hi[D];
     point_bbox<D>(verts, D + 1, lo, hi);
     for (int k = 0; k < D; ++k)
-      if (hi[k] < lo_[k] || lo[k] > hi_[k]) return false;
+      if (hi[k] < lo_[k] || lo[k] > hi_[k])
+        return false;
     for (int i = 0; i <= D; ++i)
-      if (box_dist2<D>(verts + i * D, lo_, hi_) == 0) return true;
+      if (box_dist2<D>(verts + i * D, lo_, hi_) == 0)
+        return true;
     bool bbox_inside = true; // the box holds the simplex's bounding box
-    for (int k = 0; k < D; ++k) bbox_inside &= lo[k] >= lo_[k] && hi[k] <= hi_[k];
+    for (int k = 0; k < D; ++k)
+      bbox_inside &= lo[k] >= lo_[k] && hi[k] <= hi_[k];
     return bbox_inside || simplex_meets_box<D>(verts, lo_, hi_);
   }
   void bounds(double *lo, double *hi, int) const override {
@@ -383,7 +430,8 @@ public:
   bool touches(const double *verts, [[maybe_unused]] int dim) const override {
     assert(dim == D);
     for (int i = 0; i <= D; ++i)
-      if (dot<D>(verts + i * D, n_) >= offset_) return true;
+      if (dot<D>(verts + i * D, n_) >= offset_)
+        return true;
     return false;
   }
   // Unbounded, except on the axis of an axis-aligned normal.
@@ -397,7 +445,8 @@ public:
         ++nonzero;
       }
     }
-    if (nonzero == 1) (n_[axis] > 0 ? lo[axis] : hi[axis]) = offset_ / n_[axis];
+    if (nonzero == 1)
+      (n_[axis] > 0 ? lo[axis] : hi[axis]) = offset_ / n_[axis];
   }
 
 private:
@@ -408,7 +457,8 @@ private:
 template <int D> class MovingSphereRegion final : public Region {
   static constexpr int M = D - 1; // space dimensions
 public:
-  MovingSphereRegion(const std::vector<double> &c, const std::vector<double> &v, double r, bool solid)
+  MovingSphereRegion(const std::vector<double> &c, const std::vector<double> &v, double r,
+                     bool solid)
       : r_(r), solid_(solid) {
     std::copy(c.begin(), c.end(), c_);
     std::copy(v.begin(), v.end(), v_);
@@ -419,8 +469,10 @@ public:
     assert(dim == D);
     double y[(D + 1) * M]; // y = x - v t: the sphere stands still
     for (int i = 0; i <= D; ++i)
-      for (int k = 0; k < M; ++k) y[i * M + k] = verts[i * D + k] - v_[k] * verts[i * D + M];
-    return solid_ ? hull_meets_ball<M>(c_, r2hi_, y, D + 1) : hull_meets_sphere<M>(c_, r2lo_, r2hi_, y, D + 1);
+      for (int k = 0; k < M; ++k)
+        y[i * M + k] = verts[i * D + k] - v_[k] * verts[i * D + M];
+    return solid_ ? hull_meets_ball<M>(c_, r2hi_, y, D + 1)
+                  : hull_meets_sphere<M>(c_, r2lo_, r2hi_, y, D + 1);
   }
   // Time is unbounded; so is every space axis the sphere moves along.
   void bounds(double *lo, double *hi, int) const override {
@@ -460,9 +512,11 @@ public:
     for (std::size_t m = 0; m < members_.size(); ++m) {
       const double *b = member_bounds_[m].data();
       bool hit = true;
-      for (int k = 0; k < dim && hit; ++k) hit = hi[k] >= b[k] && lo[k] <= b[kMaxDim + k];
+      for (int k = 0; k < dim && hit; ++k)
+        hit = hi[k] >= b[k] && lo[k] <= b[kMaxDim + k];
       hit = hit && members_[m]->touches(verts, dim);
-      if (hit != all_) return hit;
+      if (hit != all_)
+        return hit;
     }
     return all_;
   }
@@ -487,7 +541,8 @@ private:
 // Parsing and validation. Every message names the file, where the region sits
 // in the spec ("regions[1].regions[0]: box: ...") and the field.
 
-constexpr const char *kTypes = "sphere, hemisphere, box, halfspace, moving_sphere, union, intersection";
+constexpr const char *kTypes =
+    "sphere, hemisphere, box, halfspace, moving_sphere, union, intersection";
 constexpr int kMaxNesting = 64;
 
 struct Parser {
@@ -501,22 +556,28 @@ struct Parser {
   static std::string quoted(const std::string &s) { return "\"" + s + "\""; }
 
   // Only the fields of the type, plus "type", "name" and "comment".
-  void check_fields(const json &obj, const std::string &where, std::initializer_list<const char *> fields) const {
+  void check_fields(const json &obj, const std::string &where,
+                    std::initializer_list<const char *> fields) const {
     for (const auto &item : obj.items()) {
       const std::string &key = item.key();
-      if (key == "type" || key == "name" || key == "comment") continue;
+      if (key == "type" || key == "name" || key == "comment")
+        continue;
       bool known = false;
-      for (const char *f : fields) known |= key == f;
-      if (known) continue;
+      for (const char *f : fields)
+        known |= key == f;
+      if (known)
+        continue;
       std::string list;
-      for (const char *f : fields) list += std::string(list.empty() ? "" : ", ") + f;
+      for (const char *f : fields)
+        list += std::string(list.empty() ? "" : ", ") + f;
       fail(where, "unknown field " + quoted(key) + " (expected " + list + ", name, comment)");
     }
   }
 
   const json &field(const json &obj, const std::string &where, const char *key) const {
     auto it = obj.find(key);
-    if (it == obj.end()) fail(where, "missing " + quoted(key));
+    if (it == obj.end())
+      fail(where, "missing " + quoted(key));
     return *it;
   }
 
@@ -536,8 +597,10 @@ struct Parser {
 
   bool flag(const json &obj, const std::string &where, const char *key) const {
     auto it = obj.find(key);
-    if (it == obj.end()) return false;
-    if (!it->is_boolean()) fail(where, quoted(key) + " must be true or false");
+    if (it == obj.end())
+      return false;
+    if (!it->is_boolean())
+      fail(where, quoted(key) + " must be true or false");
     return it->get<bool>();
   }
 
@@ -545,9 +608,11 @@ struct Parser {
   std::vector<double> vec(const json &obj, const std::string &where, const char *key, int n,
                           const std::string &expected) const {
     const json &v = field(obj, where, key);
-    if (!v.is_array()) fail(where, quoted(key) + " must be an array of " + std::to_string(n) + " numbers");
+    if (!v.is_array())
+      fail(where, quoted(key) + " must be an array of " + std::to_string(n) + " numbers");
     if (int(v.size()) != n)
-      fail(where, quoted(key) + " has " + std::to_string(v.size()) + " entries, " + expected);
+      fail(where, quoted(key) + " has " + std::to_string(v.size()) +
+                      (v.size() == 1 ? " entry, " : " entries, ") + expected);
     std::vector<double> out;
     for (std::size_t i = 0; i < v.size(); ++i) {
       if (!v[i].is_number() || !std::isfinite(v[i].get<double>()))
@@ -569,32 +634,40 @@ struct Parser {
   }
 
   // Builds Region<D> for the mesh dimension.
-  template <template <int> class R, class... Args> std::unique_ptr<Region> make(Args &&...args) const {
+  template <template <int> class R, class... Args>
+  std::unique_ptr<Region> make(Args &&...args) const {
     switch (dim) {
-    case 2: return std::make_unique<R<2>>(std::forward<Args>(args)...);
-    case 3: return std::make_unique<R<3>>(std::forward<Args>(args)...);
-    default: return std::make_unique<R<4>>(std::forward<Args>(args)...);
+    case 2:
+      return std::make_unique<R<2>>(std::forward<Args>(args)...);
+    case 3:
+      return std::make_unique<R<3>>(std::forward<Args>(args)...);
+    default:
+      return std::make_unique<R<4>>(std::forward<Args>(args)...);
     }
   }
 
   std::unique_ptr<Region> region(const json &obj, const std::string &path, int depth) const {
     if (!obj.is_object())
       fail(path, "a region must be a JSON object with a \"type\" field");
-    if (depth > kMaxNesting) fail(path, "regions nested more than " + std::to_string(kMaxNesting) + " deep");
+    if (depth > kMaxNesting)
+      fail(path, "regions nested more than " + std::to_string(kMaxNesting) + " deep");
     auto t = obj.find("type");
-    if (t == obj.end()) fail(path, "missing \"type\" (expected one of " + std::string(kTypes) + ")");
-    if (!t->is_string()) fail(path, "\"type\" must be a string (one of " + std::string(kTypes) + ")");
+    if (t == obj.end())
+      fail(path, "missing \"type\" (expected one of " + std::string(kTypes) + ")");
+    if (!t->is_string())
+      fail(path, "\"type\" must be a string (one of " + std::string(kTypes) + ")");
     const std::string type = t->get<std::string>();
     const std::string where = path.empty() ? type : path + ": " + type;
 
     if (type == "sphere") {
       check_fields(obj, where, {"center", "radius", "solid"});
-      return make<SphereRegion>(point(obj, where, "center"), radius(obj, where), flag(obj, where, "solid"));
+      return make<SphereRegion>(point(obj, where, "center"), radius(obj, where),
+                                flag(obj, where, "solid"));
     }
     if (type == "hemisphere") {
       check_fields(obj, where, {"center", "radius", "normal", "offset"});
-      return make<HemisphereRegion>(point(obj, where, "center"), radius(obj, where), normal(obj, where),
-                                    number(obj, where, "offset"));
+      return make<HemisphereRegion>(point(obj, where, "center"), radius(obj, where),
+                                    normal(obj, where), number(obj, where, "offset"));
     }
     if (type == "box") {
       check_fields(obj, where, {"min", "max"});
@@ -612,24 +685,29 @@ struct Parser {
     if (type == "moving_sphere") {
       check_fields(obj, where, {"center", "velocity", "radius", "solid"});
       if (dim < 3)
-        fail(where, "needs a space-time mesh (3D or 4D, time last); the mesh is " + std::to_string(dim) + "D");
-      const std::string expected = "expected " + std::to_string(dim - 1) + " (the space dimensions of a " +
-                                   std::to_string(dim) + "D space-time mesh)";
+        fail(where, "needs a space-time mesh (3D or 4D, time last); the mesh is " +
+                        std::to_string(dim) + "D");
+      const std::string expected = "expected " + std::to_string(dim - 1) +
+                                   " (the space dimensions of a " + std::to_string(dim) +
+                                   "D space-time mesh)";
       auto c = vec(obj, where, "center", dim - 1, expected);
       auto v = vec(obj, where, "velocity", dim - 1, expected);
       const double r = radius(obj, where);
       const bool solid = flag(obj, where, "solid");
-      if (dim == 3) return std::make_unique<MovingSphereRegion<3>>(c, v, r, solid);
+      if (dim == 3)
+        return std::make_unique<MovingSphereRegion<3>>(c, v, r, solid);
       return std::make_unique<MovingSphereRegion<4>>(c, v, r, solid);
     }
     if (type == "union" || type == "intersection") {
       check_fields(obj, where, {"regions"});
       const json &list = field(obj, where, "regions");
-      if (!list.is_array() || list.empty()) fail(where, "\"regions\" must be a non-empty array of regions");
+      if (!list.is_array() || list.empty())
+        fail(where, "\"regions\" must be a non-empty array of regions");
       std::vector<std::unique_ptr<Region>> members;
       for (std::size_t i = 0; i < list.size(); ++i)
-        members.push_back(region(list[i], (path.empty() ? "" : path + ".") + "regions[" + std::to_string(i) + "]",
-                                 depth + 1));
+        members.push_back(
+            region(list[i], (path.empty() ? "" : path + ".") + "regions[" + std::to_string(i) + "]",
+                   depth + 1));
       return std::make_unique<SetRegion>(std::move(members), dim, type == "intersection");
     }
     fail(path, "unknown region type " + quoted(type) + " (expected " + kTypes + ")");
@@ -654,13 +732,15 @@ std::string line_column(const std::string &text, std::size_t byte) {
 // nlohmann's message without its "[json.exception...] parse error at ...: " prefix.
 std::string parse_detail(const std::string &what) {
   std::size_t p = what.find("parse error");
-  if (p != std::string::npos) p = what.find(": ", p);
+  if (p != std::string::npos)
+    p = what.find(": ", p);
   return p == std::string::npos ? what : what.substr(p + 2);
 }
 
 } // namespace
 
-std::unique_ptr<Region> parse_region(const std::string &json_text, int dim, const std::string &origin) {
+std::unique_ptr<Region> parse_region(const std::string &json_text, int dim,
+                                     const std::string &origin) {
   if (dim < 2 || dim > kMaxDim)
     throw InputError(origin, "regions need a 2D, 3D or 4D mesh, not " + std::to_string(dim) + "D");
   if (json_text.find_first_not_of(" \t\r\n") == std::string::npos)
@@ -669,7 +749,13 @@ std::unique_ptr<Region> parse_region(const std::string &json_text, int dim, cons
   try {
     spec = json::parse(json_text);
   } catch (const json::parse_error &e) {
-    throw InputError(origin, line_column(json_text, e.byte) + ": invalid JSON: " + parse_detail(e.what()));
+    throw InputError(origin,
+                     line_column(json_text, e.byte) + ": invalid JSON: " + parse_detail(e.what()));
+  } catch (const json::exception &e) { // e.g. a number too large for a double
+    const std::string what = e.what();
+    throw InputError(origin, "invalid JSON: " + what.substr(what.find("] ") == std::string::npos
+                                                                ? 0
+                                                                : what.find("] ") + 2));
   }
   if (!spec.is_object())
     throw InputError(origin, "the region spec must be a JSON object with a \"type\" field, not " +
@@ -681,13 +767,17 @@ std::unique_ptr<Region> read_region(const std::string &path, int dim) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
-  if (ec || !fs::exists(st)) throw InputError(path, "cannot open: no such file");
-  if (fs::is_directory(st)) throw InputError(path, "is a directory");
+  if (ec || !fs::exists(st))
+    throw InputError(path, "cannot open: no such file");
+  if (fs::is_directory(st))
+    throw InputError(path, "is a directory");
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "cannot open for reading");
+  if (!in)
+    throw InputError(path, "cannot open for reading");
   std::ostringstream text;
   text << in.rdbuf();
-  if (in.bad()) throw InputError(path, "read error");
+  if (in.bad())
+    throw InputError(path, "read error");
   return parse_region(text.str(), dim, path);
 }
 
