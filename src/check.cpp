@@ -1,10 +1,10 @@
 // Conformity checks and input validation (ALGORITHMS.md §7).
 //
 // Everything topological runs on sub-simplices identified by their sorted
-// vertex ids. Uniqueness is found without maps: references (cell, local
-// sub-simplex) are bucketed by their smallest vertex id with a counting sort,
-// then each small bucket is sorted by the remaining ids. Memory is one 32-bit
-// reference per (cell, sub-simplex) plus one offset per vertex.
+// vertex ids. Uniqueness is found without maps: sub-simplices are bucketed by
+// their smallest vertex id with a counting sort (in memory-bounded chunks),
+// then each small bucket is sorted by the remaining ids
+// (see for_each_subsimplex).
 //
 // Geometric tests use the same kernels as measure.cpp; the hanging-node test
 // hashes boundary vertices into a uniform grid and tests every boundary facet
@@ -62,101 +62,90 @@ template <int K> void sort_small(std::array<VertexId, K> &a) {
 // Calls visit(key, refs, count) once per distinct K-vertex sub-simplex of the
 // cells, with `key` its sorted vertex ids and refs[0..count) the references
 // cell * M + m (M sub-simplices per cell, m in lexicographic subset order).
-// Sub-simplices come in increasing key order.
-template <int Dim, int K, class Visit> void for_each_subsimplex(const Mesh &mesh, Visit &&visit) {
+// Sub-simplices come in increasing key order. With `signs` (per-cell
+// orientation; facets only, K == Dim) bit 31 of each reference is set when
+// the facet's opposite vertex lies on the positive side of the facet (see
+// facet_side), so the visitor never has to look the cell up again.
+//
+// Counting sort by smallest id, in chunks of consecutive smallest ids so the
+// buffer stays below kChunkBytes: each chunk scans the cells (sequentially)
+// and stores, per sub-simplex whose smallest id falls in the chunk, one
+// integer packing the other K-1 ids and the reference, high to low bits.
+// Sorting a bucket of those integers groups equal sub-simplices; the cells
+// are never visited in random order.
+constexpr std::size_t kChunkBytes = std::size_t(96) << 20;
+
+constexpr std::uint32_t kSideBit = std::uint32_t(1) << 31;
+
+template <int Dim> int facet_side(const VertexId *cell, int m, int cell_sign);
+
+template <int Dim, int K, class Visit>
+void for_each_subsimplex(const Mesh &mesh, Visit &&visit, const std::vector<std::int8_t> *signs = nullptr) {
+  static_assert(K >= 2 && K <= 4);
   static constexpr auto subsets = combinations<Dim + 1, K>();
   constexpr int M = int(subsets.size());
+  using Packed = std::conditional_t<K == 2, std::uint64_t, unsigned __int128>;
   const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
-  if (nc * M >= std::size_t(UINT32_MAX))
+  if (nc * M >= std::size_t(kSideBit))
     throw std::length_error("mesh too large for 32-bit sub-simplex references");
-  auto key_of = [&](std::size_t c, int m) {
-    const VertexId *cell = mesh.cell(CellId(c));
-    std::array<VertexId, K> key;
-    for (int i = 0; i < K; ++i) key[i] = cell[subsets[m][i]];
-    sort_small<K>(key);
-    return key;
-  };
-  auto min_of = [&](std::size_t c, int m) {
-    const VertexId *cell = mesh.cell(CellId(c));
+  auto min_of = [&](const VertexId *cell, int m) {
     VertexId v = cell[subsets[m][0]];
     for (int i = 1; i < K; ++i) v = std::min(v, cell[subsets[m][i]]);
     return v;
   };
-  // Counting sort by smallest id: after filling, bucket v is [start[v], start[v+1]).
-  std::vector<std::uint32_t> start(nv + 2, 0);
+  // start[v] .. start[v+1]: bucket of smallest id v, over all chunks.
+  std::vector<std::size_t> start(nv + 1, 0);
   for (std::size_t c = 0; c < nc; ++c)
-    for (int m = 0; m < M; ++m) ++start[min_of(c, m) + 2];
-  for (std::size_t v = 2; v < nv + 2; ++v) start[v] += start[v - 1];
-  std::vector<std::uint32_t> refs(nc * M);
-  for (std::size_t c = 0; c < nc; ++c)
-    for (int m = 0; m < M; ++m) refs[start[min_of(c, m) + 1]++] = std::uint32_t(c * M + m);
+    for (int m = 0; m < M; ++m) ++start[min_of(mesh.cell(CellId(c)), m) + 1];
+  for (std::size_t v = 1; v <= nv; ++v) start[v] += start[v - 1];
 
-  // Within bucket v every key starts with v: pack the other K-1 ids and the
-  // reference into one integer, (id_1, ..., id_{K-1}, ref) from high to low
-  // bits, and sort those.
-  using Packed = std::conditional_t<K == 2, std::uint64_t, unsigned __int128>;
-  static_assert(K >= 2 && K <= 4);
-  std::vector<Packed> bucket;
+  const std::size_t cap = std::max<std::size_t>(kChunkBytes / sizeof(Packed), 1);
+  std::vector<Packed> buffer;
+  std::vector<std::size_t> cursor;
   std::vector<std::uint32_t> group;
   std::array<VertexId, K> key;
-  auto rest_of = [](Packed p) { return p >> 32; };
-  for (std::size_t v = 0; v < nv; ++v) {
-    bucket.clear();
-    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
-      // The cells of a bucket are scattered in memory: ask for them early.
-      if (i + 16 < refs.size()) __builtin_prefetch(mesh.cell(CellId(refs[i + 16] / M)));
-      const std::array<VertexId, K> k = key_of(refs[i] / M, int(refs[i] % M));
-      Packed p = 0;
-      for (int j = 1; j < K; ++j) p = (p << 32) | k[j];
-      bucket.push_back((p << 32) | refs[i]);
+  for (std::size_t v0 = 0; v0 < nv;) {
+    std::size_t v1 = v0 + 1; // the chunk is [v0, v1), at least one bucket
+    while (v1 < nv && start[v1 + 1] - start[v0] <= cap) ++v1;
+    buffer.resize(start[v1] - start[v0]);
+    cursor.assign(start.begin() + v0, start.begin() + v1);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const VertexId *cell = mesh.cell(CellId(c));
+      for (int m = 0; m < M; ++m) {
+        const VertexId low = min_of(cell, m);
+        if (low < v0 || low >= v1) continue;
+        for (int i = 0; i < K; ++i) key[i] = cell[subsets[m][i]];
+        sort_small<K>(key);
+        Packed p = 0;
+        for (int j = 1; j < K; ++j) p = (p << 32) | key[j];
+        std::uint32_t ref = std::uint32_t(c * M + m);
+        if constexpr (K == Dim)
+          if (signs && facet_side<Dim>(cell, m, (*signs)[c]) > 0) ref |= kSideBit;
+        buffer[cursor[low - v0]++ - start[v0]] = (p << 32) | ref;
+      }
     }
-    std::sort(bucket.begin(), bucket.end());
-    key[0] = VertexId(v);
-    for (std::size_t i = 0; i < bucket.size();) {
-      std::size_t j = i;
-      group.clear();
-      const Packed rest = rest_of(bucket[i]);
-      while (j < bucket.size() && rest_of(bucket[j]) == rest) group.push_back(std::uint32_t(bucket[j++]));
-      for (int t = K - 1; t >= 1; --t) key[t] = VertexId(rest >> (32 * (K - 1 - t)));
-      visit(std::as_const(key), group.data(), int(group.size()));
-      i = j;
+    for (std::size_t v = v0; v < v1; ++v) {
+      const auto first = buffer.begin() + (start[v] - start[v0]);
+      const auto last = buffer.begin() + (start[v + 1] - start[v0]);
+      std::sort(first, last);
+      key[0] = VertexId(v);
+      for (auto i = first; i != last;) {
+        const Packed rest = *i >> 32;
+        group.clear();
+        auto j = i;
+        for (; j != last && (*j >> 32) == rest; ++j) group.push_back(std::uint32_t(*j));
+        for (int t = K - 1; t >= 1; --t) key[t] = VertexId(rest >> (32 * (K - 1 - t)));
+        visit(std::as_const(key), group.data(), int(group.size()));
+        i = j;
+      }
     }
+    v0 = v1;
   }
 }
 
 template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
   std::size_t n = 0;
   for_each_subsimplex<Dim, K>(mesh, [&](const auto &, const std::uint32_t *, int) { ++n; });
-  return n;
-}
-
-// Edges need no references: bucket each edge's larger id under its smaller
-// id, then count distinct values per bucket (no second visit to the cells).
-template <int Dim> std::size_t count_edges(const Mesh &mesh) {
-  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
-  constexpr int M = Dim * (Dim + 1) / 2;
-  if (nc * M >= std::size_t(UINT32_MAX))
-    throw std::length_error("mesh too large for 32-bit edge buckets");
-  std::vector<std::uint32_t> start(nv + 2, 0);
-  for (std::size_t c = 0; c < nc; ++c) {
-    const VertexId *cell = mesh.cell(CellId(c));
-    for (int i = 0; i <= Dim; ++i)
-      for (int j = i + 1; j <= Dim; ++j) ++start[std::min(cell[i], cell[j]) + 2];
-  }
-  for (std::size_t v = 2; v < nv + 2; ++v) start[v] += start[v - 1];
-  std::vector<VertexId> other(nc * M);
-  for (std::size_t c = 0; c < nc; ++c) {
-    const VertexId *cell = mesh.cell(CellId(c));
-    for (int i = 0; i <= Dim; ++i)
-      for (int j = i + 1; j <= Dim; ++j)
-        other[start[std::min(cell[i], cell[j]) + 1]++] = std::max(cell[i], cell[j]);
-  }
-  std::size_t n = 0;
-  for (std::size_t v = 0; v < nv; ++v) {
-    auto first = other.begin() + start[v], last = other.begin() + start[v + 1];
-    std::sort(first, last);
-    n += std::size_t(std::unique(first, last) - first);
-  }
   return n;
 }
 
@@ -334,8 +323,7 @@ struct FacetReport {
 // orientation times the permutation's parity: moving the opposite vertex from
 // local position j to the end takes Dim - j transpositions, sorting the rest
 // one per inversion. No geometry beyond the cell's own sign is needed.
-template <int Dim> int facet_side(const Mesh &mesh, CellId c, int m, int cell_sign) {
-  const VertexId *cell = mesh.cell(c);
+template <int Dim> int facet_side(const VertexId *cell, int m, int cell_sign) {
   const int j = opposite_of_facet<Dim>(m);
   std::array<VertexId, Dim> rest;
   for (int i = 0, k = 0; i <= Dim; ++i)
@@ -364,19 +352,16 @@ FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs, 
       if (keep_boundary) r.boundary.insert(r.boundary.end(), key.begin(), key.end());
     } else if (count == 2) {
       if (!signs || !r.overlap.empty()) return;
-      int side[2];
-      CellId cells[2];
-      for (int s = 0; s < 2; ++s) {
-        cells[s] = CellId(refs[s] / M);
-        side[s] = facet_side<Dim>(mesh, cells[s], int(refs[s] % M), (*signs)[cells[s]]);
-      }
-      if (side[0] != 0 && side[0] == side[1])
+      const CellId cells[2] = {CellId((refs[0] & ~kSideBit) / M), CellId((refs[1] & ~kSideBit) / M)};
+      // Degenerate cells (sign 0) are reported before this pass; skip them.
+      if ((*signs)[cells[0]] == 0 || (*signs)[cells[1]] == 0) return;
+      if ((refs[0] & kSideBit) == (refs[1] & kSideBit))
         r.overlap = "cells " + std::to_string(cells[0]) + " and " + std::to_string(cells[1]) +
                     " overlap across facet " + id_list(key);
     } else if (r.nonmanifold.empty()) {
       r.nonmanifold = "facet " + id_list(key) + " is shared by " + std::to_string(count) + " cells";
     }
-  });
+  }, signs);
   return r;
 }
 
@@ -440,7 +425,7 @@ template <int Dim> long long euler_characteristic(const Mesh &mesh, std::size_t 
     chi += sign * count;
     sign = -sign;
   };
-  if constexpr (Dim >= 3) add((long long)count_edges<Dim>(mesh));
+  if constexpr (Dim >= 3) add((long long)count_subsimplices<Dim, 2>(mesh));
   if constexpr (Dim >= 4) add((long long)count_subsimplices<Dim, 3>(mesh));
   add((long long)facets);
   add((long long)mesh.num_cells());

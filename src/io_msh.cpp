@@ -176,12 +176,11 @@ public:
     throw InputError(path_, where(at) + ": " + what);
   }
 
-  // Fails unless `n` items of at least `bytes_each` bytes fit in the rest of
-  // the file; called before any reserve() sized by a count read from the file.
-  void check_fits(std::uint64_t n, std::uint64_t bytes_each, const std::string &what, std::size_t at) const {
-    if (bytes_each != 0 && n > remaining() / bytes_each)
-      fail(at, what + " " + std::to_string(n) + " is larger than the rest of the file can hold (" +
-                   std::to_string(remaining()) + " bytes left)");
+  // How many of `n` items of at least `bytes_each` bytes the rest of the file
+  // can hold: the most a count read from the file may reserve. (A count too
+  // large is then reported where the data runs out.)
+  std::size_t affordable(std::uint64_t n, std::uint64_t bytes_each) const {
+    return std::size_t(std::min<std::uint64_t>(n, remaining() / std::max<std::uint64_t>(bytes_each, 1)));
   }
 
   // --- text
@@ -238,7 +237,9 @@ public:
 
   // The rest of the current line without its end-of-line characters; moves
   // past the newline.
-  std::string_view line() {
+  std::string_view line(const std::string &expected) {
+    if (pos_ >= text_.size())
+      fail(pos_, "file ends where " + expected + " was expected");
     const std::size_t start = pos_;
     while (pos_ < text_.size() && text_[pos_] != '\n')
       ++pos_;
@@ -337,9 +338,12 @@ struct Nodes {
   std::vector<std::uint64_t> tag; // sorted by tag once the section is read
   std::vector<double> xyz;        // 3 per node
   std::vector<std::size_t> at;    // where each node is in the file
+  bool dense = false;             // tags are tag[0], tag[0] + 1, ... (the usual case)
 
   std::size_t size() const { return tag.size(); }
   std::size_t find(std::uint64_t t) const {
+    if (dense)
+      return t >= tag.front() && t - tag.front() < tag.size() ? std::size_t(t - tag.front()) : kNone;
     const auto it = std::lower_bound(tag.begin(), tag.end(), t);
     return it != tag.end() && *it == t ? std::size_t(it - tag.begin()) : kNone;
   }
@@ -485,18 +489,18 @@ void finish_nodes(Source &src, Nodes &n) {
       const std::size_t first = std::min(n.at[i], n.at[i - 1]);
       src.fail(later, "duplicate node tag " + std::to_string(n.tag[i]) + " (first defined at " + src.where(first) + ")");
     }
+  n.dense = !n.tag.empty() && n.tag.back() - n.tag.front() == n.tag.size() - 1;
   n.read = true;
 }
 
 void read_nodes22(Source &src, MshFile &f) {
-  const std::size_t at = src.mark();
   const std::uint64_t count = src.count("the number of nodes");
-  src.check_fits(count, src.binary ? 4 + 3 * 8 : 8, "node count", at);
   if (src.binary)
     src.finish_line("the number of nodes");
-  f.nodes.tag.reserve(count);
-  f.nodes.at.reserve(count);
-  f.nodes.xyz.reserve(3 * count);
+  const std::size_t fits = src.affordable(count, src.binary ? 4 + 3 * 8 : 8);
+  f.nodes.tag.reserve(fits);
+  f.nodes.at.reserve(fits);
+  f.nodes.xyz.reserve(3 * fits);
   for (std::uint64_t i = 0; i < count; ++i)
     read_node22(src, f.nodes);
   src.expect_end("Nodes");
@@ -522,12 +526,11 @@ void read_nodes41(Source &src, MshFile &f) {
   const std::uint64_t total = size41(src, "the number of nodes");
   size41(src, "the minimum node tag");
   size41(src, "the maximum node tag");
-  src.check_fits(blocks, src.binary ? 12 + sw : 8, "node block count", header_at);
-  src.check_fits(total, src.binary ? sw + 24 : 8, "node count", header_at);
+  const std::size_t fits = src.affordable(total, src.binary ? sw + 24 : 8);
   Nodes &n = f.nodes;
-  n.tag.reserve(total);
-  n.at.reserve(total);
-  n.xyz.reserve(3 * total);
+  n.tag.reserve(fits);
+  n.at.reserve(fits);
+  n.xyz.reserve(3 * fits);
   for (std::uint64_t b = 0; b < blocks; ++b) {
     const std::size_t block_at = src.mark();
     const long long dim = int41(src, "the entity dimension of a node block");
@@ -619,10 +622,8 @@ void require_nodes_before_elements(Source &src, const MshFile &f, std::size_t at
 }
 
 void read_elements22(Source &src, MshFile &f) {
-  const std::size_t header_at = src.mark();
   const std::uint64_t total = src.count("the number of elements");
-  src.check_fits(total, 8, "element count", header_at);
-  f.elements.reserve(total);
+  f.elements.reserve(src.affordable(total, 8));
   std::vector<std::uint64_t> node_tags;
   auto note_tags = [&](const ElementType &et, std::uint64_t ntags, long long type) {
     if (ntags >= 2 && (type == kTriangle || type == kTetrahedron))
@@ -641,7 +642,6 @@ void read_elements22(Source &src, MshFile &f) {
         src.fail(block_at, "element block of " + std::to_string(count) + " elements does not fit the " +
                                std::to_string(total - done) + " elements left of the " + std::to_string(total) +
                                " announced");
-      src.check_fits(count, 4 * (1 + ntags + std::uint64_t(et.nodes)), "element block size", block_at);
       node_tags.resize(std::size_t(et.nodes));
       for (std::uint64_t i = 0; i < count; ++i) {
         const std::size_t at = src.pos();
@@ -666,9 +666,7 @@ void read_elements22(Source &src, MshFile &f) {
       const std::size_t type_at = src.mark();
       const long long type = src.integer("element type");
       const ElementType et = known_type(src, type, type_at);
-      const std::size_t ntags_at = src.mark();
       const std::uint64_t ntags = src.count("the number of element tags");
-      src.check_fits(ntags, 2, "element tag count", ntags_at);
       long long tags[2] = {0, 0};
       for (std::uint64_t j = 0; j < ntags; ++j) {
         const long long v = src.integer("element tag");
@@ -692,9 +690,7 @@ void read_elements41(Source &src, MshFile &f) {
   const std::uint64_t total = size41(src, "the number of elements");
   size41(src, "the minimum element tag");
   size41(src, "the maximum element tag");
-  src.check_fits(blocks, src.binary ? 12 + sw : 8, "element block count", header_at);
-  src.check_fits(total, src.binary ? 2 * sw : 4, "element count", header_at);
-  f.elements.reserve(total);
+  f.elements.reserve(src.affordable(total, src.binary ? 2 * sw : 4));
   std::vector<std::uint64_t> node_tags;
   std::uint64_t done = 0;
   for (std::uint64_t b = 0; b < blocks; ++b) {
@@ -708,7 +704,6 @@ void read_elements41(Source &src, MshFile &f) {
       src.fail(block_at, "element block of dimension " + std::to_string(dim) + " holds " + type_text(type));
     if (count > total - done)
       src.fail(block_at, "element blocks hold more elements than the " + std::to_string(total) + " announced");
-    src.check_fits(count, (src.binary ? sw : 2) * (1 + std::uint64_t(et.nodes)), "element block size", block_at);
     node_tags.resize(std::size_t(et.nodes));
     for (std::uint64_t i = 0; i < count; ++i) {
       const std::size_t at = src.mark();
@@ -727,21 +722,16 @@ void read_elements41(Source &src, MshFile &f) {
 
 // 4.1 $Entities: remembers the first physical tag of every entity.
 void read_entities41(Source &src, MshFile &f) {
-  const std::size_t sw = std::size_t(src.size_width);
-  const std::size_t header_at = src.mark();
   std::uint64_t counts[4];
   for (std::uint64_t &c : counts)
     c = size41(src, "the number of entities");
   for (int d = 0; d < 4; ++d) {
-    src.check_fits(counts[d], src.binary ? 4 + 3 * 8 + sw : 8, "entity count", header_at);
     for (std::uint64_t i = 0; i < counts[d]; ++i) {
       const std::size_t at = src.mark();
       const long long tag = int41(src, "entity tag");
       for (int k = 0; k < (d == 0 ? 3 : 6); ++k)
         real41(src, "entity bounding box coordinate");
-      const std::size_t nphys_at = src.mark();
       const std::uint64_t nphys = size41(src, "the number of physical tags");
-      src.check_fits(nphys, src.binary ? 4 : 2, "physical tag count", nphys_at);
       long long first = 0;
       for (std::uint64_t j = 0; j < nphys; ++j) {
         const long long p = int41(src, "physical tag");
@@ -749,9 +739,7 @@ void read_entities41(Source &src, MshFile &f) {
           first = p;
       }
       if (d > 0) {
-        const std::size_t nb_at = src.mark();
         const std::uint64_t nb = size41(src, "the number of bounding entities");
-        src.check_fits(nb, src.binary ? 4 : 2, "bounding entity count", nb_at);
         for (std::uint64_t j = 0; j < nb; ++j)
           int41(src, "bounding entity tag");
       }
@@ -792,12 +780,11 @@ void read_data(Source &src, MshFile &f, bool on_nodes, std::size_t section_at) {
   b.at = section_at;
   const std::size_t nstr_at = src.mark();
   const std::uint64_t nstr = src.count("the number of string tags");
-  src.check_fits(nstr, 1, "string tag count", nstr_at);
   if (nstr == 0)
     src.fail(nstr_at, "$" + section + " without a name (no string tags)");
   src.finish_line("the number of string tags");
   for (std::uint64_t i = 0; i < nstr; ++i) {
-    std::string_view s = src.line();
+    std::string_view s = src.line("a string tag");
     while (!s.empty() && is_space(s.front()))
       s.remove_prefix(1);
     if (s.size() >= 2 && s.front() == '"' && s.back() == '"')
@@ -805,14 +792,11 @@ void read_data(Source &src, MshFile &f, bool on_nodes, std::size_t section_at) {
     if (i == 0)
       b.name = std::string(s);
   }
-  const std::size_t nreal_at = src.mark();
   const std::uint64_t nreal = src.count("the number of real tags");
-  src.check_fits(nreal, 2, "real tag count", nreal_at);
   for (std::uint64_t i = 0; i < nreal; ++i)
     src.real("real tag");
   const std::size_t nint_at = src.mark();
   const std::uint64_t nint = src.count("the number of integer tags");
-  src.check_fits(nint, 2, "integer tag count", nint_at);
   if (nint < 3)
     src.fail(nint_at, "expected at least 3 integer tags (time step, components, entries), found " +
                           std::to_string(nint));
@@ -822,15 +806,14 @@ void read_data(Source &src, MshFile &f, bool on_nodes, std::size_t section_at) {
   if (components < 1 || components > 4096)
     src.fail(comp_at, "number of components " + std::to_string(components) + " is not in 1..4096");
   b.components = int(components);
-  const std::size_t n_at = src.mark();
   const std::uint64_t n = src.count("the number of entries");
   for (std::uint64_t i = 3; i < nint; ++i)
     src.integer("integer tag");
-  src.check_fits(n, src.binary ? 4 + 8 * components : 2 * (1 + components), "data entry count", n_at);
   if (src.binary)
     src.finish_line("the integer tags");
-  b.tags.reserve(n);
-  b.values.reserve(n * components);
+  const std::size_t fits = src.affordable(n, src.binary ? 4 + 8 * components : 2 * (1 + components));
+  b.tags.reserve(fits);
+  b.values.reserve(fits * components);
   for (std::uint64_t i = 0; i < n; ++i) {
     b.tags.push_back(src.binary ? src.raw_count("data entity tag") : src.count("data entity tag"));
     for (std::uint64_t k = 0; k < components; ++k)
@@ -887,9 +870,11 @@ MshFile parse(Source &src) {
 // From the sections to the Mesh
 
 void reject_duplicate_elements(Source &src, MshFile &f) {
-  std::sort(f.elements.begin(), f.elements.end(), [](const ElementRef &a, const ElementRef &b) {
+  const auto by_tag = [](const ElementRef &a, const ElementRef &b) {
     return a.tag != b.tag ? a.tag < b.tag : a.at < b.at;
-  });
+  };
+  if (!std::is_sorted(f.elements.begin(), f.elements.end(), by_tag))
+    std::sort(f.elements.begin(), f.elements.end(), by_tag);
   for (std::size_t i = 1; i < f.elements.size(); ++i)
     if (f.elements[i].tag == f.elements[i - 1].tag)
       src.fail(f.elements[i].at, "duplicate element tag " + std::to_string(f.elements[i].tag) +

@@ -189,8 +189,8 @@ private:
       std::copy(x, x + N, u.x);
       log_.push_back(u);
     }
-    VertexId c1[N], c2[N];
     if (s == Stage::Maubach) {
+      VertexId c1[N], c2[N];
       VertexId z = midpoint(x[0], x[t]);
       maubach_children<Dim>(x, t, z, c1, c2);
       const int t2 = maubach_child_tag(t, Dim);
@@ -199,7 +199,14 @@ private:
       append(c2, Stage::Maubach, t2, c);
       return;
     }
-    // Stage 1: x = (new vertices (t of them), old sub-simplex).
+    if constexpr (Dim >= 3) bisect_stage1(c, x, t);
+    else throw CheckError("Stage 1 cell in a 2D mesh");
+  }
+
+  // Stage 1: x = (new vertices (t of them), old sub-simplex).
+  void bisect_stage1(CellId c, const VertexId *x, int t) {
+    order_.coords = m_.coords.data(); // the coordinate array may have moved
+    VertexId c1[N], c2[N];
     EdgePick e = consistent_edge(order_, x + t, N - t);
     const int p = t + e.first, q = t + e.second;
     VertexId z = midpoint(x[p], x[q]);
@@ -215,12 +222,12 @@ private:
       if (n_old == 3) { // the old part is a triangle: enter Maubach
         triangle_tuple(order_, old, out);
         out[3] = z;
-        for (int i = 0; i < t; ++i) out[4 + i] = x[i];
+        for (int i = 0; i < t && 4 + i < N; ++i) out[4 + i] = x[i];
         child_stage = Stage::Maubach;
         child_tag = 2;
       } else {
         out[0] = z;
-        for (int i = 0; i < t; ++i) out[1 + i] = x[i];
+        for (int i = 0; i < t && 1 + i < N; ++i) out[1 + i] = x[i];
         std::copy(old, old + n_old, out + 1 + t);
       }
     }
