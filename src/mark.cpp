@@ -15,8 +15,8 @@ namespace {
 
 double squared_length(const EdgeOrder &o, VertexId a, VertexId b) {
   if (a > b) std::swap(a, b);
-  const double *p = o.coords + std::size_t(a) * o.dim;
-  const double *q = o.coords + std::size_t(b) * o.dim;
+  const double *p = o.coords->data() + std::size_t(a) * o.dim;
+  const double *q = o.coords->data() + std::size_t(b) * o.dim;
   double s = 0;
   for (int k = 0; k < o.dim; ++k) {
     double d = q[k] - p[k];
@@ -38,7 +38,7 @@ bool EdgeOrder::before(VertexId a, VertexId b, VertexId c, VertexId d) const {
 }
 
 EdgeOrder edge_order(const Mesh &mesh) {
-  return EdgeOrder{mesh.marking, mesh.coords.data(), mesh.dim};
+  return EdgeOrder{mesh.marking, &mesh.coords, mesh.dim};
 }
 
 EdgePick consistent_edge(const EdgeOrder &order, const VertexId *ids, int count) {

@@ -6,6 +6,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace bisect {
 
@@ -15,7 +16,7 @@ namespace bisect {
 // `sorted` uses the index order for the (unused) consistent edges.
 struct EdgeOrder {
   Marking marking = Marking::Index;
-  const double *coords = nullptr;
+  const std::vector<double> *coords = nullptr; // the mesh's, which may grow
   int dim = 0;
 
   // True when edge {a, b} comes before edge {c, d}.

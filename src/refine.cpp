@@ -205,7 +205,6 @@ private:
 
   // Stage 1: x = (new vertices (t of them), old sub-simplex).
   void bisect_stage1(CellId c, const VertexId *x, int t) {
-    order_.coords = m_.coords.data(); // the coordinate array may have moved
     VertexId c1[N], c2[N];
     EdgePick e = consistent_edge(order_, x + t, N - t);
     const int p = t + e.first, q = t + e.second;

@@ -73,7 +73,7 @@ TEST_CASE("longest marking: children of A, M, O tets are planar with Arnold's ma
   REQUIRE(!stage1.empty());
   const std::size_t nc0 = m.num_cells(), nv0 = m.num_vertices();
   refine(m, stage1);
-  order = edge_order(m); // coordinates grew
+  order = edge_order(m);
   // Each first child sits in its parent's slot; check it against Arnold's rule.
   std::size_t checked = 0;
   for (std::size_t i = 0; i < stage1.size(); ++i) {
