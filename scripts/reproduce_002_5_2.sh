@@ -43,6 +43,10 @@ elif ((rc != 0)); then echo "reproduce_002_5_2: bisect refine failed (exit $rc)"
 cells=$(json_int cells <<<"$summary")
 vertices=$(json_int vertices <<<"$summary")
 done_its=$(json_int iterations <<<"$summary")
+if [[ "$done_its" != "$iterations" && -f "$mesh" ]]; then   # name the file after what it holds
+  mv -f "$mesh" "$out/ball-$done_its.vtu"
+  mesh=$out/ball-$done_its.vtu
+fi
 printf '%-22s %12s %12s\n' "" "tetrahedra" "vertices"
 printf '%-22s %12s %12s\n' "this run (T_$done_its)" "$cells" "$vertices"
 printf '%-22s %12s %12s\n' "paper (T_40)" "5806615" "1045175"

@@ -31,7 +31,8 @@ namespace {
 
 constexpr int binomial(int n, int k) {
   int r = 1;
-  for (int i = 1; i <= k; ++i) r = r * (n - k + i) / i;
+  for (int i = 1; i <= k; ++i)
+    r = r * (n - k + i) / i;
   return r;
 }
 
@@ -40,23 +41,30 @@ constexpr int binomial(int n, int k) {
 template <int N, int K> constexpr std::array<std::array<int, K>, binomial(N, K)> combinations() {
   std::array<std::array<int, K>, binomial(N, K)> out{};
   std::array<int, K> c{};
-  for (int i = 0; i < K; ++i) c[i] = i;
+  for (int i = 0; i < K; ++i)
+    c[i] = i;
   for (int m = 0; m < binomial(N, K); ++m) {
     out[m] = c;
     int i = K - 1;
-    while (i >= 0 && c[i] == N - K + i) --i;
-    if (i < 0) break;
+    while (i >= 0 && c[i] == N - K + i)
+      --i;
+    if (i < 0)
+      break;
     ++c[i];
-    for (int j = i + 1; j < K; ++j) c[j] = c[j - 1] + 1;
+    for (int j = i + 1; j < K; ++j)
+      c[j] = c[j - 1] + 1;
   }
   return out;
 }
 
-template <int Dim> constexpr int opposite_of_facet(int m) { return Dim - m; }
+template <int Dim> constexpr int opposite_of_facet(int m) {
+  return Dim - m;
+}
 
 template <int K> void sort_small(std::array<VertexId, K> &a) {
   for (int i = 1; i < K; ++i)
-    for (int j = i; j > 0 && a[j] < a[j - 1]; --j) std::swap(a[j], a[j - 1]);
+    for (int j = i; j > 0 && a[j] < a[j - 1]; --j)
+      std::swap(a[j], a[j - 1]);
 }
 
 // Calls visit(key, refs, count) once per distinct K-vertex sub-simplex of the
@@ -79,25 +87,37 @@ constexpr std::uint32_t kSideBit = std::uint32_t(1) << 31;
 
 template <int Dim> int facet_side(const VertexId *cell, int m, int cell_sign);
 
-template <int Dim, int K, class Visit>
-void for_each_subsimplex(const Mesh &mesh, Visit &&visit, const std::vector<std::int8_t> *signs = nullptr) {
+template <int Bits>
+using UIntFor =
+    std::conditional_t<Bits <= 32, std::uint32_t,
+                       std::conditional_t<Bits <= 64, std::uint64_t, unsigned __int128>>;
+
+// WithRefs = false: only counts matter (refs is nullptr), the buffer holds the
+// K-1 ids alone.
+template <int Dim, int K, bool WithRefs = true, class Visit>
+void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
+                         const std::vector<std::int8_t> *signs = nullptr) {
   static_assert(K >= 2 && K <= 4);
   static constexpr auto subsets = combinations<Dim + 1, K>();
   constexpr int M = int(subsets.size());
-  using Packed = std::conditional_t<K == 2, std::uint64_t, unsigned __int128>;
+  constexpr int kRefBits = WithRefs ? 32 : 0;
+  using Packed = UIntFor<32 * (K - 1) + kRefBits>;
   const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
   if (nc * M >= std::size_t(kSideBit))
     throw std::length_error("mesh too large for 32-bit sub-simplex references");
   auto min_of = [&](const VertexId *cell, int m) {
     VertexId v = cell[subsets[m][0]];
-    for (int i = 1; i < K; ++i) v = std::min(v, cell[subsets[m][i]]);
+    for (int i = 1; i < K; ++i)
+      v = std::min(v, cell[subsets[m][i]]);
     return v;
   };
   // start[v] .. start[v+1]: bucket of smallest id v, over all chunks.
   std::vector<std::size_t> start(nv + 1, 0);
   for (std::size_t c = 0; c < nc; ++c)
-    for (int m = 0; m < M; ++m) ++start[min_of(mesh.cell(CellId(c)), m) + 1];
-  for (std::size_t v = 1; v <= nv; ++v) start[v] += start[v - 1];
+    for (int m = 0; m < M; ++m)
+      ++start[min_of(mesh.cell(CellId(c)), m) + 1];
+  for (std::size_t v = 1; v <= nv; ++v)
+    start[v] += start[v - 1];
 
   const std::size_t cap = std::max<std::size_t>(kChunkBytes / sizeof(Packed), 1);
   std::vector<Packed> buffer;
@@ -106,22 +126,30 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit, const std::vector<std:
   std::array<VertexId, K> key;
   for (std::size_t v0 = 0; v0 < nv;) {
     std::size_t v1 = v0 + 1; // the chunk is [v0, v1), at least one bucket
-    while (v1 < nv && start[v1 + 1] - start[v0] <= cap) ++v1;
+    while (v1 < nv && start[v1 + 1] - start[v0] <= cap)
+      ++v1;
     buffer.resize(start[v1] - start[v0]);
     cursor.assign(start.begin() + v0, start.begin() + v1);
     for (std::size_t c = 0; c < nc; ++c) {
       const VertexId *cell = mesh.cell(CellId(c));
       for (int m = 0; m < M; ++m) {
         const VertexId low = min_of(cell, m);
-        if (low < v0 || low >= v1) continue;
-        for (int i = 0; i < K; ++i) key[i] = cell[subsets[m][i]];
+        if (low < v0 || low >= v1)
+          continue;
+        for (int i = 0; i < K; ++i)
+          key[i] = cell[subsets[m][i]];
         sort_small<K>(key);
-        Packed p = 0;
-        for (int j = 1; j < K; ++j) p = (p << 32) | key[j];
-        std::uint32_t ref = std::uint32_t(c * M + m);
-        if constexpr (K == Dim)
-          if (signs && facet_side<Dim>(cell, m, (*signs)[c]) > 0) ref |= kSideBit;
-        buffer[cursor[low - v0]++ - start[v0]] = (p << 32) | ref;
+        unsigned __int128 p = 0;
+        for (int j = 1; j < K; ++j)
+          p = (p << 32) | key[j];
+        if constexpr (WithRefs) {
+          std::uint32_t ref = std::uint32_t(c * M + m);
+          if constexpr (K == Dim)
+            if (signs && facet_side<Dim>(cell, m, (*signs)[c]) > 0)
+              ref |= kSideBit;
+          p = (p << 32) | ref;
+        }
+        buffer[cursor[low - v0]++ - start[v0]] = Packed(p);
       }
     }
     for (std::size_t v = v0; v < v1; ++v) {
@@ -130,12 +158,15 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit, const std::vector<std:
       std::sort(first, last);
       key[0] = VertexId(v);
       for (auto i = first; i != last;) {
-        const Packed rest = *i >> 32;
+        const Packed rest = *i >> kRefBits;
         group.clear();
         auto j = i;
-        for (; j != last && (*j >> 32) == rest; ++j) group.push_back(std::uint32_t(*j));
-        for (int t = K - 1; t >= 1; --t) key[t] = VertexId(rest >> (32 * (K - 1 - t)));
-        visit(std::as_const(key), group.data(), int(group.size()));
+        for (; j != last && (*j >> kRefBits) == rest; ++j)
+          if constexpr (WithRefs)
+            group.push_back(std::uint32_t(*j));
+        for (int t = K - 1; t >= 1; --t)
+          key[t] = VertexId(rest >> (32 * (K - 1 - t)));
+        visit(std::as_const(key), WithRefs ? group.data() : nullptr, int(j - i));
         i = j;
       }
     }
@@ -145,7 +176,7 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit, const std::vector<std:
 
 template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
   std::size_t n = 0;
-  for_each_subsimplex<Dim, K>(mesh, [&](const auto &, const std::uint32_t *, int) { ++n; });
+  for_each_subsimplex<Dim, K, false>(mesh, [&](const auto &, const std::uint32_t *, int) { ++n; });
   return n;
 }
 
@@ -153,7 +184,8 @@ template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
 
 template <int Dim> double squared_distance(const double *p, const double *q) {
   double s = 0;
-  for (int i = 0; i < Dim; ++i) s += (p[i] - q[i]) * (p[i] - q[i]);
+  for (int i = 0; i < Dim; ++i)
+    s += (p[i] - q[i]) * (p[i] - q[i]);
   return s;
 }
 
@@ -163,16 +195,20 @@ double small_determinant(double *a, int n) {
   for (int k = 0; k < n; ++k) {
     int p = k;
     for (int i = k + 1; i < n; ++i)
-      if (std::abs(a[i * n + k]) > std::abs(a[p * n + k])) p = i;
-    if (a[p * n + k] == 0) return 0;
+      if (std::abs(a[i * n + k]) > std::abs(a[p * n + k]))
+        p = i;
+    if (a[p * n + k] == 0)
+      return 0;
     if (p != k) {
-      for (int j = 0; j < n; ++j) std::swap(a[k * n + j], a[p * n + j]);
+      for (int j = 0; j < n; ++j)
+        std::swap(a[k * n + j], a[p * n + j]);
       det = -det;
     }
     det *= a[k * n + k];
     for (int i = k + 1; i < n; ++i) {
       const double f = a[i * n + k] / a[k * n + k];
-      for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
+      for (int j = k + 1; j < n; ++j)
+        a[i * n + j] -= f * a[k * n + j];
     }
   }
   return det;
@@ -184,21 +220,26 @@ bool small_solve(double *g, double *b, int n, double *x) {
   for (int k = 0; k < n; ++k) {
     int p = k;
     for (int i = k + 1; i < n; ++i)
-      if (std::abs(g[i * n + k]) > std::abs(g[p * n + k])) p = i;
-    if (!(std::abs(g[p * n + k]) > 0)) return false;
+      if (std::abs(g[i * n + k]) > std::abs(g[p * n + k]))
+        p = i;
+    if (!(std::abs(g[p * n + k]) > 0))
+      return false;
     if (p != k) {
-      for (int j = 0; j < n; ++j) std::swap(g[k * n + j], g[p * n + j]);
+      for (int j = 0; j < n; ++j)
+        std::swap(g[k * n + j], g[p * n + j]);
       std::swap(b[k], b[p]);
     }
     for (int i = k + 1; i < n; ++i) {
       const double f = g[i * n + k] / g[k * n + k];
-      for (int j = k; j < n; ++j) g[i * n + j] -= f * g[k * n + j];
+      for (int j = k; j < n; ++j)
+        g[i * n + j] -= f * g[k * n + j];
       b[i] -= f * b[k];
     }
   }
   for (int k = n - 1; k >= 0; --k) {
     double s = b[k];
-    for (int j = k + 1; j < n; ++j) s -= g[k * n + j] * x[j];
+    for (int j = k + 1; j < n; ++j)
+      s -= g[k * n + j] * x[j];
     x[k] = s / g[k * n + k];
   }
   return true;
@@ -209,23 +250,27 @@ template <int Dim> double facet_measure(const double *p) {
   constexpr int n = Dim - 1;
   double e[n][Dim];
   for (int i = 0; i < n; ++i)
-    for (int d = 0; d < Dim; ++d) e[i][d] = p[(i + 1) * Dim + d] - p[d];
+    for (int d = 0; d < Dim; ++d)
+      e[i][d] = p[(i + 1) * Dim + d] - p[d];
   double g[n * n];
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
       double s = 0;
-      for (int d = 0; d < Dim; ++d) s += e[i][d] * e[j][d];
+      for (int d = 0; d < Dim; ++d)
+        s += e[i][d] * e[j][d];
       g[i * n + j] = s;
     }
   double fact = 1;
-  for (int i = 2; i <= n; ++i) fact *= i;
+  for (int i = 2; i <= n; ++i)
+    fact *= i;
   return std::sqrt(std::max(0.0, small_determinant(g, n))) / fact;
 }
 
 template <int Dim> double longest_squared_edge(const double *p) {
   double l = 0;
   for (int i = 0; i <= Dim; ++i)
-    for (int j = i + 1; j <= Dim; ++j) l = std::max(l, squared_distance<Dim>(p + i * Dim, p + j * Dim));
+    for (int j = i + 1; j <= Dim; ++j)
+      l = std::max(l, squared_distance<Dim>(p + i * Dim, p + j * Dim));
   return l;
 }
 
@@ -233,7 +278,8 @@ template <int Dim> double longest_squared_edge(const double *p) {
 template <int Dim> bool degenerate(const double *p, double volume) {
   const double l2 = longest_squared_edge<Dim>(p);
   double ln = Dim % 2 ? std::sqrt(l2) : 1; // l^Dim
-  for (int i = 0; i < Dim / 2; ++i) ln *= l2;
+  for (int i = 0; i < Dim / 2; ++i)
+    ln *= l2;
   return !(std::abs(volume) > 1e-14 * ln);
 }
 
@@ -247,32 +293,41 @@ template <int Dim> bool on_facet(const double *p, const double *x) {
   constexpr int n = Dim - 1;
   double e[n][Dim], d[Dim];
   for (int i = 0; i < n; ++i)
-    for (int k = 0; k < Dim; ++k) e[i][k] = p[(i + 1) * Dim + k] - p[k];
-  for (int k = 0; k < Dim; ++k) d[k] = x[k] - p[k];
+    for (int k = 0; k < Dim; ++k)
+      e[i][k] = p[(i + 1) * Dim + k] - p[k];
+  for (int k = 0; k < Dim; ++k)
+    d[k] = x[k] - p[k];
   double g[n * n], b[n], lambda[n];
   double size2 = 0;
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {
       double s = 0;
-      for (int k = 0; k < Dim; ++k) s += e[i][k] * e[j][k];
+      for (int k = 0; k < Dim; ++k)
+        s += e[i][k] * e[j][k];
       g[i * n + j] = s;
     }
     double s = 0;
-    for (int k = 0; k < Dim; ++k) s += e[i][k] * d[k];
+    for (int k = 0; k < Dim; ++k)
+      s += e[i][k] * d[k];
     b[i] = s;
   }
   for (int i = 0; i < Dim; ++i)
-    for (int j = i + 1; j < Dim; ++j) size2 = std::max(size2, squared_distance<Dim>(p + i * Dim, p + j * Dim));
-  if (!small_solve(g, b, n, lambda)) return false;
+    for (int j = i + 1; j < Dim; ++j)
+      size2 = std::max(size2, squared_distance<Dim>(p + i * Dim, p + j * Dim));
+  if (!small_solve(g, b, n, lambda))
+    return false;
   double rest = 1, r2 = 0;
   for (int i = 0; i < n; ++i) {
-    if (lambda[i] < -kOnFacetTol) return false;
+    if (lambda[i] < -kOnFacetTol)
+      return false;
     rest -= lambda[i];
   }
-  if (rest < -kOnFacetTol) return false;
+  if (rest < -kOnFacetTol)
+    return false;
   for (int k = 0; k < Dim; ++k) {
     double r = d[k];
-    for (int i = 0; i < n; ++i) r -= lambda[i] * e[i][k];
+    for (int i = 0; i < n; ++i)
+      r -= lambda[i] * e[i][k];
     r2 += r * r;
   }
   return r2 <= kOnFacetTol * kOnFacetTol * size2;
@@ -281,7 +336,8 @@ template <int Dim> bool on_facet(const double *p, const double *x) {
 template <int Dim> void gather(const Mesh &mesh, const VertexId *ids, int count, double *out) {
   for (int k = 0; k < count; ++k) {
     const double *q = mesh.point(ids[k]);
-    for (int d = 0; d < Dim; ++d) out[k * Dim + d] = q[d];
+    for (int d = 0; d < Dim; ++d)
+      out[k * Dim + d] = q[d];
   }
 }
 
@@ -289,13 +345,15 @@ template <int Dim> void gather(const Mesh &mesh, const VertexId *ids, int count,
 
 template <std::size_t K> std::string id_list(const std::array<VertexId, K> &key) {
   std::string s = "(";
-  for (std::size_t i = 0; i < K; ++i) s += (i ? ", " : "") + std::to_string(key[i]);
+  for (std::size_t i = 0; i < K; ++i)
+    s += (i ? ", " : "") + std::to_string(key[i]);
   return s + ")";
 }
 
 std::string id_list(const VertexId *ids, int count) {
   std::string s = "(";
-  for (int i = 0; i < count; ++i) s += (i ? ", " : "") + std::to_string(ids[i]);
+  for (int i = 0; i < count; ++i)
+    s += (i ? ", " : "") + std::to_string(ids[i]);
   return s + ")";
 }
 
@@ -312,9 +370,10 @@ struct FacetReport {
   std::size_t facets = 0;          // distinct facets
   std::size_t boundary_facets = 0; // owned by one cell
   double boundary_measure = 0;
-  std::vector<VertexId> boundary;  // Dim sorted ids per boundary facet
-  std::string nonmanifold;         // first facet shared by 3+ cells, e.g. "facet (1, 2, 3) is shared by 3 cells"
-  std::string overlap;             // first folded pair, e.g. "cells 5 and 9 overlap across facet (1, 2, 3)"
+  std::vector<VertexId> boundary; // Dim sorted ids per boundary facet
+  std::string
+      nonmanifold; // first facet shared by 3+ cells, e.g. "facet (1, 2, 3) is shared by 3 cells"
+  std::string overlap; // first folded pair, e.g. "cells 5 and 9 overlap across facet (1, 2, 3)"
 };
 
 // Side of the facet's hyperplane on which the opposite vertex of facet m of
@@ -327,10 +386,12 @@ template <int Dim> int facet_side(const VertexId *cell, int m, int cell_sign) {
   const int j = opposite_of_facet<Dim>(m);
   std::array<VertexId, Dim> rest;
   for (int i = 0, k = 0; i <= Dim; ++i)
-    if (i != j) rest[k++] = cell[i];
+    if (i != j)
+      rest[k++] = cell[i];
   int parity = Dim - j;
   for (int i = 0; i < Dim; ++i)
-    for (int k = i + 1; k < Dim; ++k) parity += rest[i] > rest[k];
+    for (int k = i + 1; k < Dim; ++k)
+      parity += rest[i] > rest[k];
   return parity % 2 ? -cell_sign : cell_sign;
 }
 
@@ -338,30 +399,38 @@ template <int Dim> int facet_side(const VertexId *cell, int m, int cell_sign) {
 // 0 for degenerate cells) it also checks that across every interior facet
 // the two opposite vertices lie on opposite sides of the facet's hyperplane.
 template <int Dim>
-FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs, bool keep_boundary) {
+FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs,
+                       bool keep_boundary) {
   constexpr int M = Dim + 1;
   FacetReport r;
   double pts[Dim * Dim];
-  for_each_subsimplex<Dim, Dim>(mesh, [&](const std::array<VertexId, Dim> &key,
-                                          const std::uint32_t *refs, int count) {
-    ++r.facets;
-    if (count == 1) {
-      ++r.boundary_facets;
-      gather<Dim>(mesh, key.data(), Dim, pts);
-      r.boundary_measure += facet_measure<Dim>(pts);
-      if (keep_boundary) r.boundary.insert(r.boundary.end(), key.begin(), key.end());
-    } else if (count == 2) {
-      if (!signs || !r.overlap.empty()) return;
-      const CellId cells[2] = {CellId((refs[0] & ~kSideBit) / M), CellId((refs[1] & ~kSideBit) / M)};
-      // Degenerate cells (sign 0) are reported before this pass; skip them.
-      if ((*signs)[cells[0]] == 0 || (*signs)[cells[1]] == 0) return;
-      if ((refs[0] & kSideBit) == (refs[1] & kSideBit))
-        r.overlap = "cells " + std::to_string(cells[0]) + " and " + std::to_string(cells[1]) +
-                    " overlap across facet " + id_list(key);
-    } else if (r.nonmanifold.empty()) {
-      r.nonmanifold = "facet " + id_list(key) + " is shared by " + std::to_string(count) + " cells";
-    }
-  }, signs);
+  for_each_subsimplex<Dim, Dim>(
+      mesh,
+      [&](const std::array<VertexId, Dim> &key, const std::uint32_t *refs, int count) {
+        ++r.facets;
+        if (count == 1) {
+          ++r.boundary_facets;
+          gather<Dim>(mesh, key.data(), Dim, pts);
+          r.boundary_measure += facet_measure<Dim>(pts);
+          if (keep_boundary)
+            r.boundary.insert(r.boundary.end(), key.begin(), key.end());
+        } else if (count == 2) {
+          if (!signs || !r.overlap.empty())
+            return;
+          const CellId cells[2] = {CellId((refs[0] & ~kSideBit) / M),
+                                   CellId((refs[1] & ~kSideBit) / M)};
+          // Degenerate cells (sign 0) are reported before this pass; skip them.
+          if ((*signs)[cells[0]] == 0 || (*signs)[cells[1]] == 0)
+            return;
+          if ((refs[0] & kSideBit) == (refs[1] & kSideBit))
+            r.overlap = "cells " + std::to_string(cells[0]) + " and " + std::to_string(cells[1]) +
+                        " overlap across facet " + id_list(key);
+        } else if (r.nonmanifold.empty()) {
+          r.nonmanifold =
+              "facet " + id_list(key) + " is shared by " + std::to_string(count) + " cells";
+        }
+      },
+      signs);
   return r;
 }
 
@@ -373,8 +442,9 @@ std::string check_ids(const Mesh &mesh) {
   for (std::size_t c = 0; c < nc; ++c)
     for (int k = 0; k < n; ++k)
       if (mesh.cells[c * n + k] >= nv)
-        return "cell " + std::to_string(c) + " refers to vertex " + std::to_string(mesh.cells[c * n + k]) +
-               ", but there are only " + std::to_string(nv) + " vertices";
+        return "cell " + std::to_string(c) + " refers to vertex " +
+               std::to_string(mesh.cells[c * n + k]) + ", but there are only " +
+               std::to_string(nv) + " vertices";
   return {};
 }
 
@@ -399,13 +469,15 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
   double pts[(Dim + 1) * Dim];
   double total = 0;
   first_degenerate = std::size_t(-1);
-  if (signs) signs->assign(nc, 0);
+  if (signs)
+    signs->assign(nc, 0);
   for (std::size_t c = 0; c < nc; ++c) {
     gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
     const double v = signed_volume(pts, Dim);
     total += std::abs(v);
     const bool bad = degenerate<Dim>(pts, v);
-    if (signs && !bad) (*signs)[c] = v > 0 ? 1 : -1;
+    if (signs && !bad)
+      (*signs)[c] = v > 0 ? 1 : -1;
     if (bad && first_degenerate == std::size_t(-1)) {
       first_degenerate = c;
       its_volume = v;
@@ -418,15 +490,18 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
 // distinct facets (already known from facet_pass).
 template <int Dim> long long euler_characteristic(const Mesh &mesh, std::size_t facets) {
   std::vector<char> used(mesh.num_vertices(), 0);
-  for (VertexId v : mesh.cells) used[v] = 1;
+  for (VertexId v : mesh.cells)
+    used[v] = 1;
   long long chi = std::count(used.begin(), used.end(), 1);
   long long sign = -1;
   auto add = [&](long long count) {
     chi += sign * count;
     sign = -sign;
   };
-  if constexpr (Dim >= 3) add((long long)count_subsimplices<Dim, 2>(mesh));
-  if constexpr (Dim >= 4) add((long long)count_subsimplices<Dim, 3>(mesh));
+  if constexpr (Dim >= 3)
+    add((long long)count_subsimplices<Dim, 2>(mesh));
+  if constexpr (Dim >= 4)
+    add((long long)count_subsimplices<Dim, 3>(mesh));
   add((long long)facets);
   add((long long)mesh.num_cells());
   return chi;
@@ -439,11 +514,14 @@ template <int Dim> long long euler_characteristic(const Mesh &mesh, std::size_t 
 // vertices need to be searched. Boundary vertices go into a uniform grid
 // (cell size = mean facet extent) stored as sorted (cell key, vertex) pairs;
 // each facet visits the grid cells its bounding box covers.
-template <int Dim> std::string find_hanging_node(const Mesh &mesh, const std::vector<VertexId> &bnd) {
+template <int Dim>
+std::string find_hanging_node(const Mesh &mesh, const std::vector<VertexId> &bnd) {
   const std::size_t nb = bnd.size() / Dim;
-  if (nb == 0) return {};
+  if (nb == 0)
+    return {};
   std::vector<char> is_bnd(mesh.num_vertices(), 0);
-  for (VertexId v : bnd) is_bnd[v] = 1;
+  for (VertexId v : bnd)
+    is_bnd[v] = 1;
 
   double lo[Dim], hi[Dim];
   std::fill(lo, lo + Dim, 1e300);
@@ -461,13 +539,15 @@ template <int Dim> std::string find_hanging_node(const Mesh &mesh, const std::ve
     double ext = 0;
     for (int d = 0; d < Dim; ++d) {
       double a = pts[d], b = pts[d];
-      for (int k = 1; k < Dim; ++k) a = std::min(a, pts[k * Dim + d]), b = std::max(b, pts[k * Dim + d]);
+      for (int k = 1; k < Dim; ++k)
+        a = std::min(a, pts[k * Dim + d]), b = std::max(b, pts[k * Dim + d]);
       ext = std::max(ext, b - a);
     }
     h += ext;
   }
   h /= double(nb);
-  if (!(h > 0)) return {};
+  if (!(h > 0))
+    return {};
 
   constexpr int kBits = 64 / Dim;
   constexpr double kMaxCells = double((std::uint64_t(1) << (kBits - 1)) - 1);
@@ -484,7 +564,8 @@ template <int Dim> std::string find_hanging_node(const Mesh &mesh, const std::ve
   };
   auto key_of = [&](const std::int64_t *idx) {
     std::uint64_t k = 0;
-    for (int d = 0; d < Dim; ++d) k |= std::uint64_t(idx[d]) << (kBits * d);
+    for (int d = 0; d < Dim; ++d)
+      k |= std::uint64_t(idx[d]) << (kBits * d);
     return k;
   };
 
@@ -492,7 +573,8 @@ template <int Dim> std::string find_hanging_node(const Mesh &mesh, const std::ve
   for (std::size_t v = 0; v < is_bnd.size(); ++v)
     if (is_bnd[v]) {
       std::int64_t idx[Dim];
-      for (int d = 0; d < Dim; ++d) idx[d] = index(mesh.point(VertexId(v))[d], d);
+      for (int d = 0; d < Dim; ++d)
+        idx[d] = index(mesh.point(VertexId(v))[d], d);
       grid.push_back({key_of(idx), VertexId(v)});
     }
   std::sort(grid.begin(), grid.end());
@@ -502,7 +584,8 @@ template <int Dim> std::string find_hanging_node(const Mesh &mesh, const std::ve
     gather<Dim>(mesh, ids, Dim, pts);
     double flo[Dim], fhi[Dim], size2 = 0;
     for (int i = 0; i < Dim; ++i)
-      for (int j = i + 1; j < Dim; ++j) size2 = std::max(size2, squared_distance<Dim>(pts + i * Dim, pts + j * Dim));
+      for (int j = i + 1; j < Dim; ++j)
+        size2 = std::max(size2, squared_distance<Dim>(pts + i * Dim, pts + j * Dim));
     const double pad = 2 * kOnFacetTol * std::sqrt(size2);
     std::int64_t ilo[Dim], ihi[Dim];
     double cover = 1;
@@ -517,18 +600,22 @@ template <int Dim> std::string find_hanging_node(const Mesh &mesh, const std::ve
       cover *= double(ihi[d] - ilo[d] + 1);
     }
     auto test = [&](VertexId v) {
-      if (std::find(ids, ids + Dim, v) != ids + Dim) return false;
+      if (std::find(ids, ids + Dim, v) != ids + Dim)
+        return false;
       const double *x = mesh.point(v);
       for (int d = 0; d < Dim; ++d)
-        if (x[d] < flo[d] || x[d] > fhi[d]) return false;
+        if (x[d] < flo[d] || x[d] > fhi[d])
+          return false;
       return on_facet<Dim>(pts, x);
     };
     auto report = [&](VertexId v) {
-      return "vertex " + std::to_string(v) + " lies on facet " + id_list(ids, Dim) + " (hanging node)";
+      return "vertex " + std::to_string(v) + " lies on facet " + id_list(ids, Dim) +
+             " (hanging node)";
     };
     if (cover > double(grid.size())) { // a huge facet: scanning everything is cheaper
       for (const auto &g : grid)
-        if (test(g.second)) return report(g.second);
+        if (test(g.second))
+          return report(g.second);
       continue;
     }
     std::int64_t idx[Dim];
@@ -537,10 +624,13 @@ template <int Dim> std::string find_hanging_node(const Mesh &mesh, const std::ve
       const std::uint64_t k = key_of(idx);
       auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(k, VertexId(0)));
       for (; it != grid.end() && it->first == k; ++it)
-        if (test(it->second)) return report(it->second);
+        if (test(it->second))
+          return report(it->second);
       int d = 0;
-      while (d < Dim && idx[d] == ihi[d]) idx[d] = ilo[d], ++d;
-      if (d == Dim) break;
+      while (d < Dim && idx[d] == ihi[d])
+        idx[d] = ilo[d], ++d;
+      if (d == Dim)
+        break;
       ++idx[d];
     }
   }
@@ -549,9 +639,12 @@ template <int Dim> std::string find_hanging_node(const Mesh &mesh, const std::ve
 
 template <class F> decltype(auto) dispatch(int dim, F &&f) {
   switch (dim) {
-  case 2: return f.template operator()<2>();
-  case 3: return f.template operator()<3>();
-  case 4: return f.template operator()<4>();
+  case 2:
+    return f.template operator()<2>();
+  case 3:
+    return f.template operator()<3>();
+  case 4:
+    return f.template operator()<4>();
   default:
     throw std::invalid_argument("unsupported dimension " + std::to_string(dim) +
                                 " (expected 2, 3 or 4)");
@@ -566,7 +659,8 @@ bool relative_change(double before, double after) {
 } // namespace
 
 Invariants measure_invariants(const Mesh &mesh) {
-  if (mesh.num_cells() == 0) return {};
+  if (mesh.num_cells() == 0)
+    return {};
   return dispatch(mesh.dim, [&]<int D>() {
     Invariants inv;
     std::size_t bad;
@@ -582,8 +676,10 @@ Invariants measure_invariants(const Mesh &mesh) {
 
 CheckResult check_conformity(const Mesh &mesh, const Invariants *original) {
   auto fail = [](std::string what) { return CheckResult{false, std::move(what)}; };
-  if (std::string s = check_shape(mesh); !s.empty()) return fail(s);
-  if (std::string s = check_ids(mesh); !s.empty()) return fail(s);
+  if (std::string s = check_shape(mesh); !s.empty())
+    return fail(s);
+  if (std::string s = check_ids(mesh); !s.empty())
+    return fail(s);
   return dispatch(mesh.dim, [&]<int D>() {
     std::size_t bad;
     double bad_volume = 0;
@@ -595,12 +691,16 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original) {
       return fail("cell " + std::to_string(bad) + " is degenerate (volume " + buf + ")");
     }
     const FacetReport fr = facet_pass<D>(mesh, &signs, true);
-    if (!fr.nonmanifold.empty()) return fail(fr.nonmanifold);
-    if (!fr.overlap.empty()) return fail(fr.overlap);
-    if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty()) return fail(s);
+    if (!fr.nonmanifold.empty())
+      return fail(fr.nonmanifold);
+    if (!fr.overlap.empty())
+      return fail(fr.overlap);
+    if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
+      return fail(s);
     if (original) {
       if (relative_change(original->volume, volume))
-        return fail(format("volume changed: %.10g -> %.10g (relative %.2g)", original->volume, volume,
+        return fail(format("volume changed: %.10g -> %.10g (relative %.2g)", original->volume,
+                           volume,
                            std::abs(volume - original->volume) / std::abs(original->volume)));
       if (relative_change(original->boundary_measure, fr.boundary_measure))
         return fail(format("boundary measure changed: %.10g -> %.10g (relative %.2g)",
@@ -617,27 +717,31 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original) {
 }
 
 void prepare_input(Mesh &mesh, const std::string &path) {
-  if (std::string s = check_shape(mesh); !s.empty()) throw InputError(path, s);
+  if (std::string s = check_shape(mesh); !s.empty())
+    throw InputError(path, s);
   const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
   for (std::size_t v = 0; v < nv; ++v)
     for (int d = 0; d < mesh.dim; ++d)
       if (!std::isfinite(mesh.point(VertexId(v))[d]))
         throw InputError(path, "vertex " + std::to_string(v) + " has a non-finite coordinate");
-  if (std::string s = check_ids(mesh); !s.empty()) throw InputError(path, s);
+  if (std::string s = check_ids(mesh); !s.empty())
+    throw InputError(path, s);
   const int n = mesh.cell_size();
   for (std::size_t c = 0; c < nc; ++c) {
     const VertexId *cell = mesh.cell(CellId(c));
     for (int i = 0; i < n; ++i)
       for (int j = i + 1; j < n; ++j)
         if (cell[i] == cell[j])
-          throw InputError(path, "cell " + std::to_string(c) + " repeats vertex " + std::to_string(cell[i]));
+          throw InputError(path, "cell " + std::to_string(c) + " repeats vertex " +
+                                     std::to_string(cell[i]));
   }
   dispatch(mesh.dim, [&]<int D>() {
     std::size_t bad;
     double bad_volume = 0;
     std::vector<std::int8_t> signs;
     cell_pass<D>(mesh, bad, bad_volume, &signs);
-    if (bad != std::size_t(-1)) throw InputError(path, "cell " + std::to_string(bad) + " has zero volume");
+    if (bad != std::size_t(-1))
+      throw InputError(path, "cell " + std::to_string(bad) + " has zero volume");
     const FacetReport fr = facet_pass<D>(mesh, &signs, true);
     if (!fr.nonmanifold.empty()) {
       // "facet (a, b) is shared by 3 cells" -> "non-manifold: facet (a, b) shared by 3 cells"
@@ -645,12 +749,14 @@ void prepare_input(Mesh &mesh, const std::string &path) {
       s.replace(s.find(" is shared"), 10, " shared");
       throw InputError(path, "non-manifold: " + s);
     }
-    if (!fr.overlap.empty()) throw InputError(path, "tangled: " + fr.overlap);
+    if (!fr.overlap.empty())
+      throw InputError(path, "tangled: " + fr.overlap);
     if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
       throw InputError(path, "non-conforming input: " + s);
     // Orient every cell positively (a negatively oriented cell is not an error).
     for (std::size_t c = 0; c < nc; ++c)
-      if (signs[c] < 0) std::swap(mesh.cell(CellId(c))[0], mesh.cell(CellId(c))[1]);
+      if (signs[c] < 0)
+        std::swap(mesh.cell(CellId(c))[0], mesh.cell(CellId(c))[1]);
   });
 }
 

@@ -34,11 +34,13 @@ std::vector<double> equilateral_points(int dim) {
     double *v = &p[k * dim];
     for (int i = 0; i < k - 1; ++i) {
       double c = 0;
-      for (int j = 0; j < k; ++j) c += p[j * dim + i];
+      for (int j = 0; j < k; ++j)
+        c += p[j * dim + i];
       v[i] = c / k;
     }
     double r2 = 0; // squared distance from the centroid to vertex 0
-    for (int i = 0; i < k - 1; ++i) r2 += v[i] * v[i];
+    for (int i = 0; i < k - 1; ++i)
+      r2 += v[i] * v[i];
     v[k - 1] = std::sqrt(1.0 - r2);
   }
   return p;
@@ -46,7 +48,8 @@ std::vector<double> equilateral_points(int dim) {
 
 std::vector<double> cartesian_points(int dim) {
   std::vector<double> p((dim + 1) * dim, 0.0);
-  for (int k = 1; k <= dim; ++k) p[k * dim + (k - 1)] = 1.0;
+  for (int k = 1; k <= dim; ++k)
+    p[k * dim + (k - 1)] = 1.0;
   return p;
 }
 
@@ -65,7 +68,8 @@ std::vector<double> random_points(int dim, std::uint64_t seed) {
       const double u = double(rng() >> 11) * 0x1.0p-53;
       x += 0.3 * (2.0 * u - 1.0);
     }
-    if (mean_ratio(p.data(), dim) > 0.2) return p;
+    if (mean_ratio(p.data(), dim) > 0.2)
+      return p;
   }
 }
 
@@ -73,8 +77,10 @@ Mesh single_cell(int dim, std::vector<double> points) {
   Mesh mesh;
   mesh.dim = dim;
   mesh.coords = std::move(points);
-  for (int k = 0; k <= dim; ++k) mesh.cells.push_back(VertexId(k));
-  if (signed_volume(mesh.coords.data(), dim) < 0) std::swap(mesh.cells[0], mesh.cells[1]);
+  for (int k = 0; k <= dim; ++k)
+    mesh.cells.push_back(VertexId(k));
+  if (signed_volume(mesh.coords.data(), dim) < 0)
+    std::swap(mesh.cells[0], mesh.cells[1]);
   return mesh;
 }
 
@@ -83,9 +89,12 @@ Mesh single_cell(int dim, std::vector<double> points) {
 Mesh generate_simplex(int dim, SimplexShape shape, std::uint64_t seed) {
   check_dimension(dim);
   switch (shape) {
-  case SimplexShape::Equilateral: return single_cell(dim, equilateral_points(dim));
-  case SimplexShape::Cartesian: return single_cell(dim, cartesian_points(dim));
-  case SimplexShape::Random: return single_cell(dim, random_points(dim, seed));
+  case SimplexShape::Equilateral:
+    return single_cell(dim, equilateral_points(dim));
+  case SimplexShape::Cartesian:
+    return single_cell(dim, cartesian_points(dim));
+  case SimplexShape::Random:
+    return single_cell(dim, random_points(dim, seed));
   }
   throw std::invalid_argument("unknown simplex shape");
 }
@@ -97,16 +106,21 @@ Mesh generate_simplex(int dim, SimplexShape shape, std::uint64_t seed) {
 // so faces match across cubes.
 Mesh generate_kuhn(int dim, int k, double lo, double hi) {
   check_dimension(dim);
-  if (k < 1) throw std::invalid_argument("kuhn: k must be at least 1");
-  if (!(hi > lo)) throw std::invalid_argument("kuhn: need lo < hi");
+  if (k < 1)
+    throw std::invalid_argument("kuhn: k must be at least 1");
+  if (!(hi > lo))
+    throw std::invalid_argument("kuhn: need lo < hi");
   Mesh mesh;
   mesh.dim = dim;
   const std::size_t side = std::size_t(k) + 1;
   std::size_t nv = 1, ncubes = 1;
-  for (int d = 0; d < dim; ++d) nv *= side, ncubes *= std::size_t(k);
+  for (int d = 0; d < dim; ++d)
+    nv *= side, ncubes *= std::size_t(k);
   std::vector<std::size_t> stride(dim);
-  for (int d = 0; d < dim; ++d) stride[d] = d == 0 ? 1 : stride[d - 1] * side;
-  if (nv > std::size_t(kNoVertex)) throw std::invalid_argument("kuhn: too many vertices");
+  for (int d = 0; d < dim; ++d)
+    stride[d] = d == 0 ? 1 : stride[d - 1] * side;
+  if (nv > std::size_t(kNoVertex))
+    throw std::invalid_argument("kuhn: too many vertices");
 
   mesh.coords.resize(nv * dim);
   for (std::size_t v = 0; v < nv; ++v)
@@ -118,8 +132,10 @@ Mesh generate_kuhn(int dim, int k, double lo, double hi) {
 
   std::vector<std::vector<int>> perms;
   std::vector<int> perm(dim);
-  for (int d = 0; d < dim; ++d) perm[d] = d;
-  do perms.push_back(perm);
+  for (int d = 0; d < dim; ++d)
+    perm[d] = d;
+  do
+    perms.push_back(perm);
   while (std::next_permutation(perm.begin(), perm.end()));
 
   mesh.cells.reserve(ncubes * perms.size() * (dim + 1));
@@ -141,7 +157,8 @@ Mesh generate_kuhn(int dim, int k, double lo, double hi) {
       for (int m = 0; m <= dim; ++m)
         for (int d = 0; d < dim; ++d)
           pts[m * dim + d] = mesh.coords[mesh.cells[first + m] * std::size_t(dim) + d];
-      if (signed_volume(pts.data(), dim) < 0) std::swap(mesh.cells[first], mesh.cells[first + 1]);
+      if (signed_volume(pts.data(), dim) < 0)
+        std::swap(mesh.cells[first], mesh.cells[first + 1]);
     }
   }
   return mesh;

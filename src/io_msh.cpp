@@ -17,9 +17,17 @@
 //
 // The reader keeps the linear simplices of the highest dimension; everything
 // it rejects is reported as InputError(path, "line N: ...") for ASCII files
-// and "byte offset N: ..." for binary ones. Counts are checked against the
-// bytes left in the file before anything is reserved, so a corrupted count
-// can neither allocate absurd memory nor loop for long.
+// and "byte offset N: ..." for binary ones. A count read from the file never
+// reserves more than the rest of the file can hold, and every loop it drives
+// consumes input, so a corrupted count ends in an error where the data runs
+// out instead of in a huge allocation or a long loop.
+//
+// Gmsh tags become the cell arrays "gmsh:physical" and "gmsh:geometrical":
+// in 2.2 the first two element tags (when elements carry two tags); in 4.1
+// the element block's entity tag and that entity's first physical tag in
+// $Entities (when the file has $Entities; "gmsh:physical" only when some
+// cell's entity has a physical tag). The writer omits $Entities for a mesh
+// without these arrays, so that reading gives none back.
 #include "io.hpp"
 
 #include <algorithm>
@@ -30,7 +38,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -60,40 +67,74 @@ struct ElementType {
 // The Gmsh element types that occur in practice (GmshDefines.h numbering).
 ElementType element_type(long long type) {
   switch (type) {
-  case 1: return {1, 2, true, true, "2-node line"};
-  case 2: return {2, 3, true, true, "3-node triangle"};
-  case 3: return {2, 4, false, true, "4-node quadrangle"};
-  case 4: return {3, 4, true, true, "4-node tetrahedron"};
-  case 5: return {3, 8, false, true, "8-node hexahedron"};
-  case 6: return {3, 6, false, true, "6-node prism"};
-  case 7: return {3, 5, false, true, "5-node pyramid"};
-  case 8: return {1, 3, true, false, "3-node line"};
-  case 9: return {2, 6, true, false, "6-node triangle"};
-  case 10: return {2, 9, false, false, "9-node quadrangle"};
-  case 11: return {3, 10, true, false, "10-node tetrahedron"};
-  case 12: return {3, 27, false, false, "27-node hexahedron"};
-  case 13: return {3, 18, false, false, "18-node prism"};
-  case 14: return {3, 14, false, false, "14-node pyramid"};
-  case 15: return {0, 1, true, true, "point"};
-  case 16: return {2, 8, false, false, "8-node quadrangle"};
-  case 17: return {3, 20, false, false, "20-node hexahedron"};
-  case 18: return {3, 15, false, false, "15-node prism"};
-  case 19: return {3, 13, false, false, "13-node pyramid"};
-  case 20: return {2, 9, true, false, "9-node triangle"};
-  case 21: return {2, 10, true, false, "10-node triangle"};
-  case 22: return {2, 12, true, false, "12-node triangle"};
-  case 23: return {2, 15, true, false, "15-node triangle"};
-  case 24: return {2, 15, true, false, "15-node incomplete triangle"};
-  case 25: return {2, 21, true, false, "21-node triangle"};
-  case 26: return {1, 4, true, false, "4-node line"};
-  case 27: return {1, 5, true, false, "5-node line"};
-  case 28: return {1, 6, true, false, "6-node line"};
-  case 29: return {3, 20, true, false, "20-node tetrahedron"};
-  case 30: return {3, 35, true, false, "35-node tetrahedron"};
-  case 31: return {3, 56, true, false, "56-node tetrahedron"};
-  case 92: return {3, 64, false, false, "64-node hexahedron"};
-  case 93: return {3, 125, false, false, "125-node hexahedron"};
-  default: return {};
+  case 1:
+    return {1, 2, true, true, "2-node line"};
+  case 2:
+    return {2, 3, true, true, "3-node triangle"};
+  case 3:
+    return {2, 4, false, true, "4-node quadrangle"};
+  case 4:
+    return {3, 4, true, true, "4-node tetrahedron"};
+  case 5:
+    return {3, 8, false, true, "8-node hexahedron"};
+  case 6:
+    return {3, 6, false, true, "6-node prism"};
+  case 7:
+    return {3, 5, false, true, "5-node pyramid"};
+  case 8:
+    return {1, 3, true, false, "3-node line"};
+  case 9:
+    return {2, 6, true, false, "6-node triangle"};
+  case 10:
+    return {2, 9, false, false, "9-node quadrangle"};
+  case 11:
+    return {3, 10, true, false, "10-node tetrahedron"};
+  case 12:
+    return {3, 27, false, false, "27-node hexahedron"};
+  case 13:
+    return {3, 18, false, false, "18-node prism"};
+  case 14:
+    return {3, 14, false, false, "14-node pyramid"};
+  case 15:
+    return {0, 1, true, true, "point"};
+  case 16:
+    return {2, 8, false, false, "8-node quadrangle"};
+  case 17:
+    return {3, 20, false, false, "20-node hexahedron"};
+  case 18:
+    return {3, 15, false, false, "15-node prism"};
+  case 19:
+    return {3, 13, false, false, "13-node pyramid"};
+  case 20:
+    return {2, 9, true, false, "9-node triangle"};
+  case 21:
+    return {2, 10, true, false, "10-node triangle"};
+  case 22:
+    return {2, 12, true, false, "12-node triangle"};
+  case 23:
+    return {2, 15, true, false, "15-node triangle"};
+  case 24:
+    return {2, 15, true, false, "15-node incomplete triangle"};
+  case 25:
+    return {2, 21, true, false, "21-node triangle"};
+  case 26:
+    return {1, 4, true, false, "4-node line"};
+  case 27:
+    return {1, 5, true, false, "5-node line"};
+  case 28:
+    return {1, 6, true, false, "6-node line"};
+  case 29:
+    return {3, 20, true, false, "20-node tetrahedron"};
+  case 30:
+    return {3, 35, true, false, "35-node tetrahedron"};
+  case 31:
+    return {3, 56, true, false, "56-node tetrahedron"};
+  case 92:
+    return {3, 64, false, false, "64-node hexahedron"};
+  case 93:
+    return {3, 125, false, false, "125-node hexahedron"};
+  default:
+    return {};
   }
 }
 
@@ -127,27 +168,30 @@ std::string quoted(std::string_view t) {
   return out + "'";
 }
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+bool is_space(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v';
+}
 
 class Source {
 public:
   explicit Source(const std::string &path) : path_(path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in)
+    std::FILE *file = std::fopen(path.c_str(), "rb");
+    if (!file)
       throw InputError(path, std::string("cannot open: ") + std::strerror(errno));
-    in.seekg(0, std::ios::end);
-    const std::streamoff size = in.tellg();
-    in.seekg(0, std::ios::beg);
-    if (size < 0)
-      throw InputError(path, "cannot read");
-    text_.resize(std::size_t(size));
-    if (size > 0 && !in.read(text_.data(), size))
-      throw InputError(path, "cannot read");
+    char chunk[1 << 16];
+    std::size_t got;
+    while ((got = std::fread(chunk, 1, sizeof chunk, file)) > 0)
+      text_.append(chunk, got);
+    const bool failed = std::ferror(file);
+    const int err = errno;
+    std::fclose(file);
+    if (failed)
+      throw InputError(path, std::string("cannot read: ") + std::strerror(err));
   }
 
-  bool binary = false;  // decided by $MeshFormat
-  bool swap = false;    // binary data in the other byte order
-  int size_width = 8;   // bytes of a size_t field in 4.1 binary files
+  bool binary = false; // decided by $MeshFormat
+  bool swap = false;   // binary data in the other byte order
+  int size_width = 8;  // bytes of a size_t field in 4.1 binary files
 
   const std::string &path() const { return path_; }
   std::size_t pos() const { return pos_; }
@@ -180,7 +224,8 @@ public:
   // can hold: the most a count read from the file may reserve. (A count too
   // large is then reported where the data runs out.)
   std::size_t affordable(std::uint64_t n, std::uint64_t bytes_each) const {
-    return std::size_t(std::min<std::uint64_t>(n, remaining() / std::max<std::uint64_t>(bytes_each, 1)));
+    return std::size_t(
+        std::min<std::uint64_t>(n, remaining() / std::max<std::uint64_t>(bytes_each, 1)));
   }
 
   // --- text
@@ -202,8 +247,11 @@ public:
     const std::size_t start = pos_;
     while (pos_ < text_.size() && !is_space(text_[pos_]))
       ++pos_;
-    return std::string_view(text_).substr(start, pos_ - start);
+    last_ = std::string_view(text_).substr(start, pos_ - start);
+    return last_;
   }
+  // The last token read, quoted for a message.
+  std::string last_token() const { return quoted(last_); }
 
   std::uint64_t count(const std::string &what) {
     const std::string_view t = token(what);
@@ -255,7 +303,8 @@ public:
   // else but blanks. Used where binary data starts on the next line (binary
   // data may itself begin with bytes that look like whitespace).
   void finish_line(const std::string &after) {
-    while (pos_ < text_.size() && (text_[pos_] == ' ' || text_[pos_] == '\t' || text_[pos_] == '\r'))
+    while (pos_ < text_.size() &&
+           (text_[pos_] == ' ' || text_[pos_] == '\t' || text_[pos_] == '\r'))
       ++pos_;
     if (pos_ >= text_.size())
       fail(pos_, "file ends after " + after);
@@ -264,7 +313,8 @@ public:
       std::size_t end = start;
       while (end < text_.size() && !is_space(text_[end]))
         ++end;
-      fail(pos_, "unexpected " + quoted(std::string_view(text_).substr(start, end - start)) + " after " + after);
+      fail(pos_, "unexpected " + quoted(std::string_view(text_).substr(start, end - start)) +
+                     " after " + after);
     }
     ++pos_;
   }
@@ -328,6 +378,7 @@ private:
   std::string path_;
   std::string text_;
   std::size_t pos_ = 0;
+  std::string_view last_;
 };
 
 // ---------------------------------------------------------------------------
@@ -343,7 +394,8 @@ struct Nodes {
   std::size_t size() const { return tag.size(); }
   std::size_t find(std::uint64_t t) const {
     if (dense)
-      return t >= tag.front() && t - tag.front() < tag.size() ? std::size_t(t - tag.front()) : kNone;
+      return t >= tag.front() && t - tag.front() < tag.size() ? std::size_t(t - tag.front())
+                                                              : kNone;
     const auto it = std::lower_bound(tag.begin(), tag.end(), t);
     return it != tag.end() && *it == t ? std::size_t(it - tag.begin()) : kNone;
   }
@@ -393,11 +445,11 @@ struct MshFile {
   std::size_t elements_at = 0;
   Simplices simplices[4];
   std::vector<ElementRef> elements;
-  int top_dim = -1;            // highest dimension among simplices of any order
+  int top_dim = -1;                              // highest dimension among simplices of any order
   bool tags22[4] = {false, false, false, false}; // a 2.2 triangle/tet carried >= 2 tags
-  Sighting non_simplex[4];     // quads, hexahedra, prisms, pyramids per dimension
-  Sighting higher_order[4];    // curved simplices per dimension
-  std::size_t off_plane_at = kNone; // first triangle with a node off z = 0
+  Sighting non_simplex[4];                       // quads, hexahedra, prisms, pyramids per dimension
+  Sighting higher_order[4];                      // curved simplices per dimension
+  std::size_t off_plane_at = kNone;              // first triangle with a node off z = 0
   std::string off_plane_what;
   bool have_entities = false;
   std::map<std::pair<int, long long>, long long> first_physical; // (dim, entity) -> tag or 0
@@ -408,17 +460,18 @@ struct MshFile {
 // Sections
 
 void read_format(Source &src, MshFile &f) {
-  const std::string_view v = src.token("the MSH version");
-  const std::size_t v_at = src.at(v);
-  if (v == "2.2")
+  const std::size_t v_at = src.mark();
+  const double v = src.real("the MSH version");
+  if (v == 2.2)
     f.version = 22;
-  else if (v == "4.1")
+  else if (v == 4.1)
     f.version = 41;
   else
-    src.fail(v_at, "unsupported MSH version " + quoted(v) + " (supported: 2.2 and 4.1)");
+    src.fail(v_at, "unsupported MSH version " + src.last_token() + " (supported: 2.2 and 4.1)");
   const std::uint64_t type = src.count("the file type (0 ASCII, 1 binary)");
   if (type > 1)
-    src.fail(src.pos(), "file type " + std::to_string(type) + " is neither 0 (ASCII) nor 1 (binary)");
+    src.fail(src.pos(),
+             "file type " + std::to_string(type) + " is neither 0 (ASCII) nor 1 (binary)");
   const std::size_t size_at = src.mark();
   const std::uint64_t data_size = src.count("the data size");
   if (type == 1) {
@@ -426,7 +479,8 @@ void read_format(Source &src, MshFile &f) {
     if (f.version == 22 && data_size != 8)
       src.fail(size_at, "binary MSH 2.2 needs data size 8, found " + std::to_string(data_size));
     if (f.version == 41 && data_size != 4 && data_size != 8)
-      src.fail(size_at, "binary MSH 4.1 needs a size_t of 4 or 8 bytes, found " + std::to_string(data_size));
+      src.fail(size_at,
+               "binary MSH 4.1 needs a size_t of 4 or 8 bytes, found " + std::to_string(data_size));
     src.size_width = int(data_size);
     src.finish_line("the data size");
     const std::size_t one_at = src.pos();
@@ -434,13 +488,30 @@ void read_format(Source &src, MshFile &f) {
     if (one == 0x01000000)
       src.swap = true;
     else if (one != 1)
-      src.fail(one_at, "expected the binary integer 1 (endianness check), found " + std::to_string(one));
+      src.fail(one_at,
+               "expected the binary integer 1 (endianness check), found " + std::to_string(one));
   }
   src.expect_end("MeshFormat");
 }
 
-// Reads one node of a 2.2 file.
-void read_node22(Source &src, Nodes &n) {
+// A size_t field (4.1) in an ASCII or binary file.
+std::uint64_t size41(Source &src, const std::string &what) {
+  return src.binary ? src.raw_size(what) : src.count(what);
+}
+
+// An int field in an ASCII or binary file.
+long long int41(Source &src, const std::string &what) {
+  return src.binary ? src.raw<std::int32_t>(what) : src.integer(what);
+}
+
+double real41(Source &src, const std::string &what) {
+  return src.binary ? src.raw<double>(what) : src.real(what);
+}
+
+// Reads one node of a 2.2 file. A $ParametricNodes node continues with
+// the dimension and tag of its entity and its 0, 1 or 2 parametric
+// coordinates (u for curves, u v for surfaces).
+void read_node22(Source &src, Nodes &n, bool parametric) {
   const std::size_t at = src.mark();
   std::uint64_t tag;
   double xyz[3];
@@ -452,6 +523,15 @@ void read_node22(Source &src, Nodes &n) {
     tag = src.count("node tag");
     for (double &x : xyz)
       x = src.real("node coordinate");
+  }
+  if (parametric) {
+    const std::size_t dim_at = src.mark();
+    const long long dim = int41(src, "node entity dimension");
+    if (dim < 0 || dim > 3)
+      src.fail(dim_at, "node entity dimension " + std::to_string(dim) + " is not 0..3");
+    int41(src, "node entity tag");
+    for (long long k = 0; k < (dim == 1 || dim == 2 ? dim : 0); ++k)
+      real41(src, "parametric coordinate");
   }
   n.tag.push_back(tag);
   n.at.push_back(at);
@@ -469,7 +549,8 @@ void finish_nodes(Source &src, Nodes &n) {
   if (!std::is_sorted(n.tag.begin(), n.tag.end())) {
     std::vector<std::size_t> order(n.size());
     std::iota(order.begin(), order.end(), std::size_t(0));
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return n.tag[a] < n.tag[b]; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return n.tag[a] < n.tag[b]; });
     Nodes s;
     s.tag.reserve(n.size());
     s.at.reserve(n.size());
@@ -477,7 +558,8 @@ void finish_nodes(Source &src, Nodes &n) {
     for (std::size_t i : order) {
       s.tag.push_back(n.tag[i]);
       s.at.push_back(n.at[i]);
-      s.xyz.insert(s.xyz.end(), n.xyz.begin() + std::ptrdiff_t(3 * i), n.xyz.begin() + std::ptrdiff_t(3 * i + 3));
+      s.xyz.insert(s.xyz.end(), n.xyz.begin() + std::ptrdiff_t(3 * i),
+                   n.xyz.begin() + std::ptrdiff_t(3 * i + 3));
     }
     n.tag = std::move(s.tag);
     n.at = std::move(s.at);
@@ -487,13 +569,14 @@ void finish_nodes(Source &src, Nodes &n) {
     if (n.tag[i] == n.tag[i - 1]) {
       const std::size_t later = std::max(n.at[i], n.at[i - 1]);
       const std::size_t first = std::min(n.at[i], n.at[i - 1]);
-      src.fail(later, "duplicate node tag " + std::to_string(n.tag[i]) + " (first defined at " + src.where(first) + ")");
+      src.fail(later, "duplicate node tag " + std::to_string(n.tag[i]) + " (first defined at " +
+                          src.where(first) + ")");
     }
   n.dense = !n.tag.empty() && n.tag.back() - n.tag.front() == n.tag.size() - 1;
   n.read = true;
 }
 
-void read_nodes22(Source &src, MshFile &f) {
+void read_nodes22(Source &src, MshFile &f, bool parametric) {
   const std::uint64_t count = src.count("the number of nodes");
   if (src.binary)
     src.finish_line("the number of nodes");
@@ -502,22 +585,10 @@ void read_nodes22(Source &src, MshFile &f) {
   f.nodes.at.reserve(fits);
   f.nodes.xyz.reserve(3 * fits);
   for (std::uint64_t i = 0; i < count; ++i)
-    read_node22(src, f.nodes);
-  src.expect_end("Nodes");
+    read_node22(src, f.nodes, parametric);
+  src.expect_end(parametric ? "ParametricNodes" : "Nodes");
   finish_nodes(src, f.nodes);
 }
-
-// A size_t field of a 4.1 file (ASCII or binary).
-std::uint64_t size41(Source &src, const std::string &what) {
-  return src.binary ? src.raw_size(what) : src.count(what);
-}
-
-// An int field of a 4.1 file (ASCII or binary).
-long long int41(Source &src, const std::string &what) {
-  return src.binary ? src.raw<std::int32_t>(what) : src.integer(what);
-}
-
-double real41(Source &src, const std::string &what) { return src.binary ? src.raw<double>(what) : src.real(what); }
 
 void read_nodes41(Source &src, MshFile &f) {
   const std::size_t sw = std::size_t(src.size_width);
@@ -540,9 +611,11 @@ void read_nodes41(Source &src, MshFile &f) {
     if (dim < 0 || dim > 3)
       src.fail(block_at, "node block entity dimension " + std::to_string(dim) + " is not 0..3");
     if (parametric != 0 && parametric != 1)
-      src.fail(block_at, "node block parametric flag " + std::to_string(parametric) + " is not 0 or 1");
+      src.fail(block_at,
+               "node block parametric flag " + std::to_string(parametric) + " is not 0 or 1");
     if (count > total - n.size())
-      src.fail(block_at, "node blocks hold more nodes than the " + std::to_string(total) + " announced");
+      src.fail(block_at,
+               "node blocks hold more nodes than the " + std::to_string(total) + " announced");
     const int extra = parametric ? int(dim) : 0; // u, v, w of parametric nodes
     for (std::uint64_t i = 0; i < count; ++i) {
       n.at.push_back(src.mark());
@@ -556,8 +629,8 @@ void read_nodes41(Source &src, MshFile &f) {
     }
   }
   if (n.size() != total)
-    src.fail(header_at, "node header announces " + std::to_string(total) + " nodes, the blocks hold " +
-                            std::to_string(n.size()));
+    src.fail(header_at, "node header announces " + std::to_string(total) +
+                            " nodes, the blocks hold " + std::to_string(n.size()));
   src.expect_end("Nodes");
   finish_nodes(src, n);
 }
@@ -570,8 +643,8 @@ void add_element(Source &src, MshFile &f, std::uint64_t tag, long long type, con
   for (int k = 0; k < et.nodes; ++k) {
     const std::size_t p = f.nodes.find(node_tags[k]);
     if (p == kNone)
-      src.fail(at, "element " + std::to_string(tag) + " refers to node " + std::to_string(node_tags[k]) +
-                       ", which is not in $Nodes");
+      src.fail(at, "element " + std::to_string(tag) + " refers to node " +
+                       std::to_string(node_tags[k]) + ", which is not in $Nodes");
     if (k < 4)
       idx[k] = std::uint32_t(p);
   }
@@ -593,8 +666,8 @@ void add_element(Source &src, MshFile &f, std::uint64_t tag, long long type, con
           f.off_plane_at = at;
           char buf[64];
           std::snprintf(buf, sizeof buf, "%.17g", z);
-          f.off_plane_what = "triangle " + std::to_string(tag) + " has node " + std::to_string(node_tags[k]) +
-                             " at z = " + buf;
+          f.off_plane_what = "triangle " + std::to_string(tag) + " has node " +
+                             std::to_string(node_tags[k]) + " at z = " + buf;
           break;
         }
       }
@@ -639,9 +712,9 @@ void read_elements22(Source &src, MshFile &f) {
       const std::uint64_t ntags = src.raw_count("the number of element tags");
       const ElementType et = known_type(src, type, block_at);
       if (count == 0 || count > total - done)
-        src.fail(block_at, "element block of " + std::to_string(count) + " elements does not fit the " +
-                               std::to_string(total - done) + " elements left of the " + std::to_string(total) +
-                               " announced");
+        src.fail(block_at, "element block of " + std::to_string(count) +
+                               " elements does not fit the " + std::to_string(total - done) +
+                               " elements left of the " + std::to_string(total) + " announced");
       node_tags.resize(std::size_t(et.nodes));
       for (std::uint64_t i = 0; i < count; ++i) {
         const std::size_t at = src.pos();
@@ -701,9 +774,11 @@ void read_elements41(Source &src, MshFile &f) {
     const std::uint64_t count = size41(src, "the number of elements in a block");
     const ElementType et = known_type(src, type, block_at);
     if (dim != et.dim)
-      src.fail(block_at, "element block of dimension " + std::to_string(dim) + " holds " + type_text(type));
+      src.fail(block_at,
+               "element block of dimension " + std::to_string(dim) + " holds " + type_text(type));
     if (count > total - done)
-      src.fail(block_at, "element blocks hold more elements than the " + std::to_string(total) + " announced");
+      src.fail(block_at, "element blocks hold more elements than the " + std::to_string(total) +
+                             " announced");
     node_tags.resize(std::size_t(et.nodes));
     for (std::uint64_t i = 0; i < count; ++i) {
       const std::size_t at = src.mark();
@@ -715,8 +790,8 @@ void read_elements41(Source &src, MshFile &f) {
     done += count;
   }
   if (done != total)
-    src.fail(header_at, "element header announces " + std::to_string(total) + " elements, the blocks hold " +
-                            std::to_string(done));
+    src.fail(header_at, "element header announces " + std::to_string(total) +
+                            " elements, the blocks hold " + std::to_string(done));
   src.expect_end("Elements");
 }
 
@@ -744,7 +819,8 @@ void read_entities41(Source &src, MshFile &f) {
           int41(src, "bounding entity tag");
       }
       if (!f.first_physical.emplace(std::make_pair(d, tag), first).second)
-        src.fail(at, "duplicate entity (dimension " + std::to_string(d) + ", tag " + std::to_string(tag) + ")");
+        src.fail(at, "duplicate entity (dimension " + std::to_string(d) + ", tag " +
+                         std::to_string(tag) + ")");
     }
   }
   src.expect_end("Entities");
@@ -762,8 +838,9 @@ void keep_data(Source &src, MshFile &f, DataBlock &&b) {
       d = std::move(b);
     } else {
       if (d.components != b.components)
-        src.fail(b.at, "data " + quoted(b.name) + " changes from " + std::to_string(d.components) + " to " +
-                           std::to_string(b.components) + " components within one time step");
+        src.fail(b.at, "data " + quoted(b.name) + " changes from " + std::to_string(d.components) +
+                           " to " + std::to_string(b.components) +
+                           " components within one time step");
       d.tags.insert(d.tags.end(), b.tags.begin(), b.tags.end());
       d.values.insert(d.values.end(), b.values.begin(), b.values.end());
     }
@@ -811,7 +888,8 @@ void read_data(Source &src, MshFile &f, bool on_nodes, std::size_t section_at) {
     src.integer("integer tag");
   if (src.binary)
     src.finish_line("the integer tags");
-  const std::size_t fits = src.affordable(n, src.binary ? 4 + 8 * components : 2 * (1 + components));
+  const std::size_t fits =
+      src.affordable(n, src.binary ? 4 + 8 * components : 2 * (1 + components));
   b.tags.reserve(fits);
   b.values.reserve(fits * components);
   for (std::uint64_t i = 0; i < n; ++i) {
@@ -829,7 +907,8 @@ MshFile parse(Source &src) {
   if (first == "$NOD" || first == "$NOE")
     src.fail(src.at(first), "MSH version 1 files are not supported (supported: 2.2 and 4.1)");
   if (first != "$MeshFormat")
-    src.fail(src.at(first), "expected $MeshFormat at the start of a .msh file, found " + quoted(first));
+    src.fail(src.at(first),
+             "expected $MeshFormat at the start of a .msh file, found " + quoted(first));
   read_format(src, f);
   while (!src.at_end()) {
     const std::string_view t = src.token("a section header");
@@ -840,10 +919,10 @@ MshFile parse(Source &src) {
     if (name.rfind("End", 0) == 0)
       src.fail(at, "unexpected " + quoted(t) + " outside its section");
     src.finish_line("$" + name);
-    if (name == "Nodes") {
+    if (name == "Nodes" || (name == "ParametricNodes" && f.version == 22)) {
       if (f.nodes.read)
         src.fail(at, "second $Nodes section");
-      f.version == 22 ? read_nodes22(src, f) : read_nodes41(src, f);
+      f.version == 22 ? read_nodes22(src, f, name == "ParametricNodes") : read_nodes41(src, f);
     } else if (name == "Elements") {
       require_nodes_before_elements(src, f, at);
       f.elements_at = at;
@@ -888,11 +967,13 @@ int cell_dimension(Source &src, const MshFile &f) {
     src.fail(f.elements_at, "no triangles or tetrahedra in $Elements");
   const char *cells = dim == 3 ? "tetrahedra" : "triangles";
   if (f.higher_order[dim].at != kNone)
-    src.fail(f.higher_order[dim].at, type_text(f.higher_order[dim].type) +
-                                         ": higher-order simplices are not supported (only linear " + cells + ")");
+    src.fail(f.higher_order[dim].at,
+             type_text(f.higher_order[dim].type) +
+                 ": higher-order simplices are not supported (only linear " + cells + ")");
   if (f.non_simplex[dim].at != kNone)
-    src.fail(f.non_simplex[dim].at, "mixed non-simplex cells: " + type_text(f.non_simplex[dim].type) +
-                                        " among the " + cells + " is not supported");
+    src.fail(f.non_simplex[dim].at,
+             "mixed non-simplex cells: " + type_text(f.non_simplex[dim].type) + " among the " +
+                 cells + " is not supported");
   if (dim == 2 && f.off_plane_at != kNone)
     src.fail(f.off_plane_at, "surface mesh in 3D is not supported: " + f.off_plane_what +
                                  " (a triangle mesh must lie in the plane z = 0)");
@@ -926,25 +1007,27 @@ void add_gmsh_tags(const MshFile &f, int dim, Mesh &m) {
   m.cell_data.push_back(std::move(geom));
 }
 
-DataArray node_array(Source &src, const MshFile &f, const DataBlock &b, const std::vector<VertexId> &vertex_of,
-                     std::size_t nv) {
+DataArray node_array(Source &src, const MshFile &f, const DataBlock &b,
+                     const std::vector<VertexId> &vertex_of, std::size_t nv) {
   const std::size_t nc = std::size_t(b.components);
   DataArray a{b.name, b.components, std::vector<double>(nv * nc, 0.0)};
   std::vector<char> covered(nv, 0);
   for (std::size_t i = 0; i < b.tags.size(); ++i) {
     const std::size_t p = f.nodes.find(b.tags[i]);
     if (p == kNone)
-      src.fail(b.at, "node data " + quoted(b.name) + " refers to node " + std::to_string(b.tags[i]) +
-                         ", which is not in $Nodes");
+      src.fail(b.at, "node data " + quoted(b.name) + " refers to node " +
+                         std::to_string(b.tags[i]) + ", which is not in $Nodes");
     const VertexId v = vertex_of[p];
     if (v == kNoVertex)
       continue;
-    std::copy_n(b.values.begin() + std::ptrdiff_t(i * nc), nc, a.values.begin() + std::ptrdiff_t(v * nc));
+    std::copy_n(b.values.begin() + std::ptrdiff_t(i * nc), nc,
+                a.values.begin() + std::ptrdiff_t(v * nc));
     covered[v] = 1;
   }
   for (std::size_t p = 0; p < vertex_of.size(); ++p)
     if (vertex_of[p] != kNoVertex && !covered[vertex_of[p]])
-      src.fail(b.at, "node data " + quoted(b.name) + " has no value for node " + std::to_string(f.nodes.tag[p]));
+      src.fail(b.at, "node data " + quoted(b.name) + " has no value for node " +
+                         std::to_string(f.nodes.tag[p]));
   return a;
 }
 
@@ -955,19 +1038,22 @@ DataArray cell_array(Source &src, const MshFile &f, const DataBlock &b, int dim)
   DataArray a{b.name, b.components, std::vector<double>(ncells * nc, 0.0)};
   std::vector<char> covered(ncells, 0);
   for (std::size_t i = 0; i < b.tags.size(); ++i) {
-    const auto it = std::lower_bound(f.elements.begin(), f.elements.end(), b.tags[i],
-                                     [](const ElementRef &e, std::uint64_t t) { return e.tag < t; });
+    const auto it =
+        std::lower_bound(f.elements.begin(), f.elements.end(), b.tags[i],
+                         [](const ElementRef &e, std::uint64_t t) { return e.tag < t; });
     if (it == f.elements.end() || it->tag != b.tags[i])
-      src.fail(b.at, "element data " + quoted(b.name) + " refers to element " + std::to_string(b.tags[i]) +
-                         ", which is not in $Elements");
+      src.fail(b.at, "element data " + quoted(b.name) + " refers to element " +
+                         std::to_string(b.tags[i]) + ", which is not in $Elements");
     if (it->dim != dim || it->index == kNoIndex)
       continue; // a dropped lower-dimensional element
-    std::copy_n(b.values.begin() + std::ptrdiff_t(i * nc), nc, a.values.begin() + std::ptrdiff_t(it->index * nc));
+    std::copy_n(b.values.begin() + std::ptrdiff_t(i * nc), nc,
+                a.values.begin() + std::ptrdiff_t(it->index * nc));
     covered[it->index] = 1;
   }
   for (const ElementRef &e : f.elements)
     if (e.dim == dim && e.index != kNoIndex && !covered[e.index])
-      src.fail(b.at, "element data " + quoted(b.name) + " has no value for element " + std::to_string(e.tag));
+      src.fail(b.at, "element data " + quoted(b.name) + " has no value for element " +
+                         std::to_string(e.tag));
   return a;
 }
 
@@ -1044,7 +1130,8 @@ public:
 
 private:
   void flush() {
-    if (!buffer_.empty() && std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size() && !error_)
+    if (!buffer_.empty() &&
+        std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size() && !error_)
       error_ = errno ? errno : EIO;
     buffer_.clear();
   }
@@ -1064,21 +1151,26 @@ void check_writable(const std::string &path, const Mesh &mesh) {
   if (mesh.dim == 4)
     throw InputError(path, "a .msh file cannot hold a 4D mesh; write .vtu");
   if (mesh.dim != 2 && mesh.dim != 3)
-    throw InputError(path, "cannot write a mesh of dimension " + std::to_string(mesh.dim) + " to .msh");
+    throw InputError(path,
+                     "cannot write a mesh of dimension " + std::to_string(mesh.dim) + " to .msh");
   const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
-  if (mesh.coords.size() != nv * std::size_t(mesh.dim) || mesh.cells.size() != nc * std::size_t(mesh.cell_size()))
+  if (mesh.coords.size() != nv * std::size_t(mesh.dim) ||
+      mesh.cells.size() != nc * std::size_t(mesh.cell_size()))
     throw InputError(path, "mesh arrays have inconsistent sizes");
   if (nv > std::size_t(INT_MAX) || nc > std::size_t(INT_MAX))
     throw InputError(path, "too many vertices or cells for a .msh file (at most 2^31 - 1)");
   for (VertexId v : mesh.cells)
     if (v >= nv)
-      throw InputError(path, "a cell refers to vertex " + std::to_string(v) + " of " + std::to_string(nv));
+      throw InputError(path, "a cell refers to vertex " + std::to_string(v) + " of " +
+                                 std::to_string(nv));
   auto check = [&](const DataArray &a, std::size_t n, const char *kind) {
     if (a.components < 1 || a.values.size() != n * std::size_t(a.components))
       throw InputError(path, std::string(kind) + " array " + quoted(a.name) + " has " +
-                                 std::to_string(a.values.size()) + " values for " + std::to_string(n) + " entities");
+                                 std::to_string(a.values.size()) + " values for " +
+                                 std::to_string(n) + " entities");
     if (a.name.find_first_of("\r\n") != std::string::npos)
-      throw InputError(path, std::string(kind) + " array name " + quoted(a.name) + " contains a line break");
+      throw InputError(path, std::string(kind) + " array name " + quoted(a.name) +
+                                 " contains a line break");
   };
   for (const DataArray &a : mesh.point_data)
     check(a, nv, "point");
@@ -1099,8 +1191,8 @@ long long tag_value(const std::string &path, const DataArray *a, std::size_t c) 
     return 0;
   const double v = a->values[c];
   if (!(v == std::floor(v)) || v < INT_MIN || v > INT_MAX)
-    throw InputError(path, "cell array " + quoted(a->name) + " holds " + std::to_string(v) + " at cell " +
-                               std::to_string(c) + ", which is not an integer tag");
+    throw InputError(path, "cell array " + quoted(a->name) + " holds " + std::to_string(v) +
+                               " at cell " + std::to_string(c) + ", which is not an integer tag");
   return (long long)v;
 }
 
@@ -1124,7 +1216,8 @@ struct EntityPlan {
 // One entity per distinct (geometrical, physical) pair, tagged with the
 // geometrical tag unless another pair already took it; one element block per
 // maximal run of consecutive cells of one entity.
-EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const DataArray *geom, const DataArray *phys) {
+EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const DataArray *geom,
+                         const DataArray *phys) {
   EntityPlan plan;
   const std::size_t nc = mesh.num_cells();
   long long next_tag = 1;
@@ -1224,8 +1317,8 @@ void write_elements(Output &out, const Mesh &mesh, const EntityPlan &plan) {
 
 // One $NodeData/$ElementData section: time 0, time step 0.
 void write_data(Output &out, const std::string &section, const DataArray &a, std::size_t n) {
-  out.text("$" + section + "\n1\n\"" + a.name + "\"\n1\n0\n3\n0\n" + std::to_string(a.components) + "\n" +
-           std::to_string(n) + "\n");
+  out.text("$" + section + "\n1\n\"" + a.name + "\"\n1\n0\n3\n0\n" + std::to_string(a.components) +
+           "\n" + std::to_string(n) + "\n");
   const std::size_t nc = std::size_t(a.components);
   for (std::size_t i = 0; i < n; ++i) {
     out.int32((long long)(i + 1));

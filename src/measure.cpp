@@ -15,7 +15,9 @@
 namespace bisect {
 namespace {
 
-constexpr double factorial(int n) { return n <= 1 ? 1.0 : n * factorial(n - 1); }
+constexpr double factorial(int n) {
+  return n <= 1 ? 1.0 : n * factorial(n - 1);
+}
 
 // Determinant of a Dim x Dim matrix (row-major). Closed forms for 2 and 3,
 // Gaussian elimination with partial pivoting for 4.
@@ -30,17 +32,21 @@ template <int Dim> double determinant(std::array<double, Dim * Dim> a) {
     for (int k = 0; k < Dim; ++k) {
       int p = k;
       for (int i = k + 1; i < Dim; ++i)
-        if (std::abs(a[i * Dim + k]) > std::abs(a[p * Dim + k])) p = i;
-      if (a[p * Dim + k] == 0) return 0;
+        if (std::abs(a[i * Dim + k]) > std::abs(a[p * Dim + k]))
+          p = i;
+      if (a[p * Dim + k] == 0)
+        return 0;
       if (p != k) {
-        for (int j = 0; j < Dim; ++j) std::swap(a[k * Dim + j], a[p * Dim + j]);
+        for (int j = 0; j < Dim; ++j)
+          std::swap(a[k * Dim + j], a[p * Dim + j]);
         det = -det;
       }
       const double pivot = a[k * Dim + k];
       det *= pivot;
       for (int i = k + 1; i < Dim; ++i) {
         const double f = a[i * Dim + k] / pivot;
-        for (int j = k + 1; j < Dim; ++j) a[i * Dim + j] -= f * a[k * Dim + j];
+        for (int j = k + 1; j < Dim; ++j)
+          a[i * Dim + j] -= f * a[k * Dim + j];
       }
     }
     return det;
@@ -51,13 +57,15 @@ template <int Dim> double determinant(std::array<double, Dim * Dim> a) {
 template <int Dim> double edge_determinant(const double *verts) {
   std::array<double, Dim * Dim> a;
   for (int i = 0; i < Dim; ++i)
-    for (int j = 0; j < Dim; ++j) a[i * Dim + j] = verts[(j + 1) * Dim + i] - verts[i];
+    for (int j = 0; j < Dim; ++j)
+      a[i * Dim + j] = verts[(j + 1) * Dim + i] - verts[i];
   return determinant<Dim>(a);
 }
 
 template <int Dim> double squared_distance(const double *p, const double *q) {
   double s = 0;
-  for (int i = 0; i < Dim; ++i) s += (p[i] - q[i]) * (p[i] - q[i]);
+  for (int i = 0; i < Dim; ++i)
+    s += (p[i] - q[i]) * (p[i] - q[i]);
   return s;
 }
 
@@ -75,14 +83,19 @@ template <int Dim> double mean_ratio_t(const double *verts) {
   constexpr int n = Dim;
   double sum_sq = 0;
   for (int i = 0; i <= n; ++i)
-    for (int j = i + 1; j <= n; ++j) sum_sq += squared_distance<Dim>(verts + i * Dim, verts + j * Dim);
-  if (!(sum_sq > 0)) return 0;
+    for (int j = i + 1; j <= n; ++j)
+      sum_sq += squared_distance<Dim>(verts + i * Dim, verts + j * Dim);
+  if (!(sum_sq > 0))
+    return 0;
   const double det_w = std::sqrt(double(n + 1)) / std::pow(2.0, 0.5 * n);
   const double r = std::abs(edge_determinant<Dim>(verts)) / det_w; // |det S|
-  double r_2n; // |det S|^(2/n)
-  if constexpr (n == 2) r_2n = r;
-  else if constexpr (n == 4) r_2n = std::sqrt(r);
-  else r_2n = std::cbrt(r * r);
+  double r_2n;                                                     // |det S|^(2/n)
+  if constexpr (n == 2)
+    r_2n = r;
+  else if constexpr (n == 4)
+    r_2n = std::sqrt(r);
+  else
+    r_2n = std::cbrt(r * r);
   const double frob_sq = 2.0 / (n + 1) * sum_sq;
   return n * r_2n / frob_sq;
 }
@@ -91,14 +104,16 @@ template <int Dim> void cell_points_t(const Mesh &mesh, CellId c, double *out) {
   const VertexId *cell = mesh.cell(c);
   for (int k = 0; k <= Dim; ++k) {
     const double *p = mesh.point(cell[k]);
-    for (int i = 0; i < Dim; ++i) out[k * Dim + i] = p[i];
+    for (int i = 0; i < Dim; ++i)
+      out[k * Dim + i] = p[i];
   }
 }
 
 template <int Dim> QualitySummary quality_summary_t(const Mesh &mesh) {
   const std::size_t nc = mesh.num_cells();
   QualitySummary s;
-  if (nc == 0) return s;
+  if (nc == 0)
+    return s;
   s.min = 1e300;
   s.max = -1e300;
   double sum = 0;
@@ -116,7 +131,9 @@ template <int Dim> QualitySummary quality_summary_t(const Mesh &mesh) {
 
 // ---- similarity classes ----------------------------------------------------
 
-constexpr int num_edges(int dim) { return dim * (dim + 1) / 2; }
+constexpr int num_edges(int dim) {
+  return dim * (dim + 1) / 2;
+}
 
 // Every permutation of the dim+1 vertices, as a map from key slot (edge (i,j),
 // i<j, in lexicographic order) to the edge index of the unpermuted simplex.
@@ -125,14 +142,17 @@ template <int Dim> struct PermutationTable {
   std::vector<std::array<std::uint8_t, kEdges>> slots;
   PermutationTable() {
     std::array<int, Dim + 1> perm;
-    for (int i = 0; i <= Dim; ++i) perm[i] = i;
+    for (int i = 0; i <= Dim; ++i)
+      perm[i] = i;
     int edge_index[Dim + 1][Dim + 1] = {};
     for (int i = 0, e = 0; i <= Dim; ++i)
-      for (int j = i + 1; j <= Dim; ++j, ++e) edge_index[i][j] = edge_index[j][i] = e;
+      for (int j = i + 1; j <= Dim; ++j, ++e)
+        edge_index[i][j] = edge_index[j][i] = e;
     do {
       std::array<std::uint8_t, kEdges> s;
       for (int i = 0, e = 0; i <= Dim; ++i)
-        for (int j = i + 1; j <= Dim; ++j, ++e) s[e] = std::uint8_t(edge_index[perm[i]][perm[j]]);
+        for (int j = i + 1; j <= Dim; ++j, ++e)
+          s[e] = std::uint8_t(edge_index[perm[i]][perm[j]]);
       slots.push_back(s);
     } while (std::next_permutation(perm.begin(), perm.end()));
   }
@@ -167,10 +187,12 @@ template <int Dim> void similarity_key_t(const double *verts, std::int32_t *key)
         best = &p;
         break;
       }
-      if (a > b) break;
+      if (a > b)
+        break;
     }
   }
-  for (int e = 0; e < E; ++e) key[e] = rounded[(*best)[e]];
+  for (int e = 0; e < E; ++e)
+    key[e] = rounded[(*best)[e]];
 }
 
 template <int Dim> std::size_t count_similarity_classes_t(const Mesh &mesh) {
@@ -194,10 +216,14 @@ template <int Dim> std::size_t count_similarity_classes_t(const Mesh &mesh) {
 // Calls f.template operator()<Dim>() for the run-time dimension.
 template <class F> decltype(auto) dispatch(int dim, F &&f) {
   switch (dim) {
-  case 2: return f.template operator()<2>();
-  case 3: return f.template operator()<3>();
-  case 4: return f.template operator()<4>();
-  default: bad_dimension(dim);
+  case 2:
+    return f.template operator()<2>();
+  case 3:
+    return f.template operator()<3>();
+  case 4:
+    return f.template operator()<4>();
+  default:
+    bad_dimension(dim);
   }
 }
 
@@ -216,7 +242,8 @@ void cell_points(const Mesh &mesh, CellId c, double *out) {
 }
 
 QualitySummary quality_summary(const Mesh &mesh) {
-  if (mesh.num_cells() == 0) return {};
+  if (mesh.num_cells() == 0)
+    return {};
   return dispatch(mesh.dim, [&]<int D>() { return quality_summary_t<D>(mesh); });
 }
 
@@ -229,7 +256,8 @@ std::vector<long long> similarity_key(const double *verts, int dim) {
 }
 
 std::size_t count_similarity_classes(const Mesh &mesh) {
-  if (mesh.num_cells() == 0) return 0;
+  if (mesh.num_cells() == 0)
+    return 0;
   return dispatch(mesh.dim, [&]<int D>() { return count_similarity_classes_t<D>(mesh); });
 }
 

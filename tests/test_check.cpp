@@ -24,7 +24,9 @@ Mesh make_mesh(int dim, std::vector<double> coords, std::vector<VertexId> cells)
   return m;
 }
 
-double factorial(int n) { return n <= 1 ? 1 : n * factorial(n - 1); }
+double factorial(int n) {
+  return n <= 1 ? 1 : n * factorial(n - 1);
+}
 
 VertexId add_vertex(Mesh &m, const std::vector<double> &x) {
   m.coords.insert(m.coords.end(), x.begin(), x.end());
@@ -37,7 +39,8 @@ VertexId add_vertex(Mesh &m, const std::vector<double> &x) {
 int off_diagonal_local(const Mesh &m) {
   const VertexId last = VertexId(m.num_vertices() - 1);
   for (int i = 0; i <= m.dim; ++i)
-    if (m.cell(0)[i] != 0 && m.cell(0)[i] != last) return i;
+    if (m.cell(0)[i] != 0 && m.cell(0)[i] != last)
+      return i;
   return -1;
 }
 
@@ -85,7 +88,8 @@ TEST_CASE("check: a Kuhn mesh passes against its own invariants, also after rela
   // Reverse the vertex numbering: nothing geometric changes.
   const VertexId nv = VertexId(m.num_vertices());
   Mesh r = m;
-  for (VertexId &v : r.cells) v = nv - 1 - v;
+  for (VertexId &v : r.cells)
+    v = nv - 1 - v;
   for (VertexId v = 0; v < nv; ++v)
     std::copy(m.point(v), m.point(v) + dim, r.coords.begin() + std::size_t(nv - 1 - v) * dim);
   const CheckResult res = check_conformity(r, &inv);
@@ -107,7 +111,8 @@ TEST_CASE("check: a facet shared by three cells is found", "[check][2d][3d][4d]"
     const int skip = off_diagonal_local(m);
     std::vector<VertexId> extra;
     for (int i = 0; i <= dim; ++i)
-      if (i != skip) extra.push_back(m.cell(0)[i]);
+      if (i != skip)
+        extra.push_back(m.cell(0)[i]);
     std::vector<double> far(dim, 3.0);
     far[0] = -2.0;
     extra.push_back(add_vertex(m, far));
@@ -135,13 +140,16 @@ TEST_CASE("check: a tangled mesh (two overlapping cells) is rejected", "[check][
     const VertexId opposite = m.cell(0)[skip];
     std::vector<VertexId> facet;
     for (int i = 0; i <= dim; ++i)
-      if (i != skip) facet.push_back(m.cell(0)[i]);
+      if (i != skip)
+        facet.push_back(m.cell(0)[i]);
     // P halfway between the facet's centroid and cell 0's opposite vertex:
     // on cell 0's side of the facet.
     std::vector<double> p(dim, 0.0);
     for (VertexId v : facet)
-      for (int d = 0; d < dim; ++d) p[d] += m.point(v)[d] / dim;
-    for (int d = 0; d < dim; ++d) p[d] = 0.5 * (p[d] + m.point(opposite)[d]);
+      for (int d = 0; d < dim; ++d)
+        p[d] += m.point(v)[d] / dim;
+    for (int d = 0; d < dim; ++d)
+      p[d] = 0.5 * (p[d] + m.point(opposite)[d]);
     const VertexId pv = add_vertex(m, p);
     // The neighbour across the facet now uses P instead of its own opposite vertex.
     bool moved = false;
@@ -150,9 +158,11 @@ TEST_CASE("check: a tangled mesh (two overlapping cells) is rejected", "[check][
       const int shared = int(std::count_if(facet.begin(), facet.end(), [&](VertexId v) {
         return std::find(cell, cell + dim + 1, v) != cell + dim + 1;
       }));
-      if (shared != dim) continue;
+      if (shared != dim)
+        continue;
       for (int i = 0; i <= dim; ++i)
-        if (std::find(facet.begin(), facet.end(), cell[i]) == facet.end()) cell[i] = pv;
+        if (std::find(facet.begin(), facet.end(), cell[i]) == facet.end())
+          cell[i] = pv;
       moved = true;
     }
     REQUIRE(moved);
@@ -210,9 +220,9 @@ TEST_CASE("check: hanging vertices that are not edge midpoints are caught too", 
   SECTION("3D: a face centre, on no edge at all") {
     // Tets above and below triangle (0,1,2); the upper one is split into three
     // by the centroid 5 of that triangle, the lower one is not.
-    Mesh m = make_mesh(3,
-                       {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.2, 0.2, 1, 0.2, 0.2, -1, 1.0 / 3, 1.0 / 3, 0},
-                       {0, 1, 5, 3, 1, 2, 5, 3, 2, 0, 5, 3, 0, 1, 2, 4});
+    Mesh m =
+        make_mesh(3, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.2, 0.2, 1, 0.2, 0.2, -1, 1.0 / 3, 1.0 / 3, 0},
+                  {0, 1, 5, 3, 1, 2, 5, 3, 2, 0, 5, 3, 0, 1, 2, 4});
     CHECK(prepare_error(m, "f.vtu") ==
           "f.vtu: non-conforming input: vertex 5 lies on facet (0, 1, 2) (hanging node)");
     CHECK_THAT(check_conformity(m).failure, Contains("hanging node"));
@@ -223,7 +233,8 @@ TEST_CASE("check: negatively oriented cells are reoriented, not rejected", "[che
   const int dim = GENERATE(2, 3, 4);
   const Mesh kuhn = generate_kuhn(dim, 2);
   Mesh m = kuhn;
-  for (std::size_t c = 0; c < m.num_cells(); c += 2) std::swap(m.cell(CellId(c))[0], m.cell(CellId(c))[1]);
+  for (std::size_t c = 0; c < m.num_cells(); c += 2)
+    std::swap(m.cell(CellId(c))[0], m.cell(CellId(c))[1]);
   CHECK(check_conformity(m).ok); // orientation is not a conformity property
   REQUIRE_NOTHROW(prepare_input(m, "neg.vtu"));
   CHECK(m.cells == kuhn.cells);
@@ -239,12 +250,14 @@ TEST_CASE("check: a changed volume is reported", "[check][3d]") {
   Mesh m = generate_kuhn(3, 2, 0.0, 2.0);
   const Invariants inv = measure_invariants(m);
   Mesh scaled = m;
-  for (double &x : scaled.coords) x *= 1 + 1e-4;
+  for (double &x : scaled.coords)
+    x *= 1 + 1e-4;
   CheckResult r = check_conformity(scaled, &inv);
   CHECK_FALSE(r.ok);
   CHECK_THAT(r.failure, StartsWith("volume changed: 8 -> 8.002") && Contains("(relative 0.0003)"));
   // Within the relative tolerance 1e-9 nothing is reported.
-  for (double &x : m.coords) x *= 1 + 1e-12;
+  for (double &x : m.coords)
+    x *= 1 + 1e-12;
   r = check_conformity(m, &inv);
   INFO(r.failure);
   CHECK(r.ok);
@@ -267,7 +280,8 @@ TEST_CASE("check: changed boundary measure and Euler characteristic are reported
   for (CellId c = 0; c < m.num_cells(); ++c) {
     cell_points(m, c, p.data());
     const double cx = (p[0] + p[2] + p[4]) / 3, cy = (p[1] + p[3] + p[5]) / 3;
-    if (cx > 1.0 / 3 && cx < 2.0 / 3 && cy > 1.0 / 3 && cy < 2.0 / 3) continue;
+    if (cx > 1.0 / 3 && cx < 2.0 / 3 && cy > 1.0 / 3 && cy < 2.0 / 3)
+      continue;
     annulus.cells.insert(annulus.cells.end(), m.cell(c), m.cell(c) + 3);
   }
   CHECK(annulus.num_cells() == m.num_cells() - 2);
@@ -281,7 +295,8 @@ TEST_CASE("check: a degenerate cell is reported with its index", "[check][2d]") 
   CHECK(prepare_error(m, "d.msh") == "d.msh: cell 1 has zero volume");
 }
 
-TEST_CASE("prepare_input rejects bad coordinates and ids, naming the file and the entity", "[check][2d]") {
+TEST_CASE("prepare_input rejects bad coordinates and ids, naming the file and the entity",
+          "[check][2d]") {
   const Mesh good = make_mesh(2, {0, 0, 1, 0, 0, 1}, {0, 1, 2});
   SECTION("non-finite coordinate") {
     Mesh m = good;
@@ -293,7 +308,8 @@ TEST_CASE("prepare_input rejects bad coordinates and ids, naming the file and th
   SECTION("id out of range") {
     Mesh m = good;
     m.cells[2] = 7;
-    CHECK(prepare_error(m, "a.msh") == "a.msh: cell 0 refers to vertex 7, but there are only 3 vertices");
+    CHECK(prepare_error(m, "a.msh") ==
+          "a.msh: cell 0 refers to vertex 7, but there are only 3 vertices");
   }
   SECTION("repeated vertex") {
     Mesh m = good;

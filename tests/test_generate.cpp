@@ -12,7 +12,9 @@ using namespace bisect;
 
 namespace {
 
-double factorial(int n) { return n <= 1 ? 1 : n * factorial(n - 1); }
+double factorial(int n) {
+  return n <= 1 ? 1 : n * factorial(n - 1);
+}
 
 double cell_volume(const Mesh &m, CellId c) {
   std::vector<double> p((m.dim + 1) * m.dim);
@@ -20,7 +22,9 @@ double cell_volume(const Mesh &m, CellId c) {
   return signed_volume(p.data(), m.dim);
 }
 
-bool unmarked(const Mesh &m) { return m.stage.empty() && m.tag.empty(); }
+bool unmarked(const Mesh &m) {
+  return m.stage.empty() && m.tag.empty();
+}
 
 } // namespace
 
@@ -43,13 +47,15 @@ TEST_CASE("equilateral simplex has unit edges, is positively oriented and unmark
   CHECK(cell_volume(m, 0) > 0);
 }
 
-TEST_CASE("cartesian simplex is the origin and the unit vectors, volume 1/n!", "[generate][2d][3d][4d]") {
+TEST_CASE("cartesian simplex is the origin and the unit vectors, volume 1/n!",
+          "[generate][2d][3d][4d]") {
   const int dim = GENERATE(2, 3, 4);
   const Mesh m = generate_simplex(dim, SimplexShape::Cartesian);
   CHECK(unmarked(m));
   CHECK(cell_volume(m, 0) == Approx(1.0 / factorial(dim)));
   std::vector<double> expected((dim + 1) * dim, 0.0);
-  for (int k = 1; k <= dim; ++k) expected[k * dim + k - 1] = 1;
+  for (int k = 1; k <= dim; ++k)
+    expected[k * dim + k - 1] = 1;
   CHECK(m.coords == expected);
 }
 
@@ -66,14 +72,16 @@ TEST_CASE("random simplex is deterministic per seed, positive and of mean ratio 
     cell_points(a, 0, p.data());
     CHECK(mean_ratio(p.data(), dim) > 0.2);
     const Mesh cart = generate_simplex(dim, SimplexShape::Cartesian);
-    for (std::size_t i = 0; i < a.coords.size(); ++i) CHECK(std::abs(a.coords[i] - cart.coords[i]) <= 0.3);
+    for (std::size_t i = 0; i < a.coords.size(); ++i)
+      CHECK(std::abs(a.coords[i] - cart.coords[i]) <= 0.3);
   }
   CHECK(generate_simplex(dim, SimplexShape::Random, 1).coords !=
         generate_simplex(dim, SimplexShape::Random, 2).coords);
 }
 
-TEST_CASE("kuhn: [0,1]^4 with k=1 is 24 pentatopes of total volume 1 and passes the conformity check",
-          "[generate][4d]") {
+TEST_CASE(
+    "kuhn: [0,1]^4 with k=1 is 24 pentatopes of total volume 1 and passes the conformity check",
+    "[generate][4d]") {
   const Mesh m = generate_kuhn(4, 1);
   CHECK(m.num_cells() == 24);
   CHECK(m.num_vertices() == 16);
@@ -87,7 +95,8 @@ TEST_CASE("kuhn: [0,1]^4 with k=1 is 24 pentatopes of total volume 1 and passes 
   CHECK(r.failure.empty());
 }
 
-TEST_CASE("kuhn meshes in 2D/3D/4D are conforming with Euler characteristic 1", "[generate][2d][3d][4d]") {
+TEST_CASE("kuhn meshes in 2D/3D/4D are conforming with Euler characteristic 1",
+          "[generate][2d][3d][4d]") {
   const int dim = GENERATE(2, 3, 4);
   const int k = GENERATE(1, 2, 3);
   const Mesh m = generate_kuhn(dim, k, -1.0, 1.0);
@@ -105,7 +114,8 @@ TEST_CASE("kuhn meshes in 2D/3D/4D are conforming with Euler characteristic 1", 
   CHECK(copy.cells == m.cells); // already positively oriented
 }
 
-TEST_CASE("kuhn: vertices lie on the lattice, cells are positive and unmarked", "[generate][2d][3d][4d]") {
+TEST_CASE("kuhn: vertices lie on the lattice, cells are positive and unmarked",
+          "[generate][2d][3d][4d]") {
   const int dim = GENERATE(2, 3, 4);
   const int k = 3;
   const double lo = 0.5, hi = 2.0;

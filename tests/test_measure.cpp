@@ -24,7 +24,8 @@ std::vector<double> simplex_points(const Mesh &m) {
 std::vector<double> permuted(const std::vector<double> &p, const std::vector<int> &perm, int dim) {
   std::vector<double> q(p.size());
   for (int k = 0; k <= dim; ++k)
-    for (int d = 0; d < dim; ++d) q[k * dim + d] = p[perm[k] * dim + d];
+    for (int d = 0; d < dim; ++d)
+      q[k * dim + d] = p[perm[k] * dim + d];
   return q;
 }
 
@@ -34,16 +35,21 @@ std::vector<double> random_rotation(int dim, std::mt19937_64 &rng) {
   std::vector<double> q(dim * dim);
   for (int j = 0; j < dim; ++j) {
     std::vector<double> v(dim);
-    for (double &x : v) x = u(rng);
+    for (double &x : v)
+      x = u(rng);
     for (int k = 0; k < j; ++k) {
       double dot = 0;
-      for (int i = 0; i < dim; ++i) dot += v[i] * q[i * dim + k];
-      for (int i = 0; i < dim; ++i) v[i] -= dot * q[i * dim + k];
+      for (int i = 0; i < dim; ++i)
+        dot += v[i] * q[i * dim + k];
+      for (int i = 0; i < dim; ++i)
+        v[i] -= dot * q[i * dim + k];
     }
     double norm = 0;
-    for (double x : v) norm += x * x;
+    for (double x : v)
+      norm += x * x;
     norm = std::sqrt(norm);
-    for (int i = 0; i < dim; ++i) q[i * dim + j] = v[i] / norm;
+    for (int i = 0; i < dim; ++i)
+      q[i * dim + j] = v[i] / norm;
   }
   return q;
 }
@@ -55,7 +61,8 @@ std::vector<double> transformed(const std::vector<double> &p, int dim, const std
   for (int k = 0; k <= dim; ++k)
     for (int i = 0; i < dim; ++i) {
       double x = 0;
-      for (int j = 0; j < dim; ++j) x += q[i * dim + j] * p[k * dim + j];
+      for (int j = 0; j < dim; ++j)
+        x += q[i * dim + j] * p[k * dim + j];
       r[k * dim + i] = s * x + t[i];
     }
   return r;
@@ -63,13 +70,15 @@ std::vector<double> transformed(const std::vector<double> &p, int dim, const std
 
 // Determinant by cofactor expansion (small n only; independent of measure.cpp).
 double det_ref(const std::vector<double> &a, int n) {
-  if (n == 1) return a[0];
+  if (n == 1)
+    return a[0];
   double det = 0;
   for (int j = 0; j < n; ++j) {
     std::vector<double> minor;
     for (int r = 1; r < n; ++r)
       for (int c = 0; c < n; ++c)
-        if (c != j) minor.push_back(a[r * n + c]);
+        if (c != j)
+          minor.push_back(a[r * n + c]);
     det += (j % 2 ? -1 : 1) * a[j] * det_ref(minor, n - 1);
   }
   return det;
@@ -78,38 +87,47 @@ double det_ref(const std::vector<double> &a, int n) {
 // Inverse by Gauss-Jordan, row-major.
 std::vector<double> inverse_ref(std::vector<double> a, int n) {
   std::vector<double> inv(n * n, 0.0);
-  for (int i = 0; i < n; ++i) inv[i * n + i] = 1;
+  for (int i = 0; i < n; ++i)
+    inv[i * n + i] = 1;
   for (int k = 0; k < n; ++k) {
     int p = k;
     for (int i = k + 1; i < n; ++i)
-      if (std::abs(a[i * n + k]) > std::abs(a[p * n + k])) p = i;
-    for (int j = 0; j < n; ++j) std::swap(a[k * n + j], a[p * n + j]), std::swap(inv[k * n + j], inv[p * n + j]);
+      if (std::abs(a[i * n + k]) > std::abs(a[p * n + k]))
+        p = i;
+    for (int j = 0; j < n; ++j)
+      std::swap(a[k * n + j], a[p * n + j]), std::swap(inv[k * n + j], inv[p * n + j]);
     const double piv = a[k * n + k];
-    for (int j = 0; j < n; ++j) a[k * n + j] /= piv, inv[k * n + j] /= piv;
+    for (int j = 0; j < n; ++j)
+      a[k * n + j] /= piv, inv[k * n + j] /= piv;
     for (int i = 0; i < n; ++i)
       if (i != k) {
         const double f = a[i * n + k];
-        for (int j = 0; j < n; ++j) a[i * n + j] -= f * a[k * n + j], inv[i * n + j] -= f * inv[k * n + j];
+        for (int j = 0; j < n; ++j)
+          a[i * n + j] -= f * a[k * n + j], inv[i * n + j] -= f * inv[k * n + j];
       }
   }
   return inv;
 }
 
 // Knupp's q = n |det S|^(2/n) / |S|_F^2 with S = A W^-1, computed literally.
-double mean_ratio_by_definition(const std::vector<double> &p, const std::vector<double> &ref, int n) {
+double mean_ratio_by_definition(const std::vector<double> &p, const std::vector<double> &ref,
+                                int n) {
   auto edge_matrix = [n](const std::vector<double> &x) {
     std::vector<double> a(n * n);
     for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) a[i * n + j] = x[(j + 1) * n + i] - x[i];
+      for (int j = 0; j < n; ++j)
+        a[i * n + j] = x[(j + 1) * n + i] - x[i];
     return a;
   };
   const std::vector<double> a = edge_matrix(p), winv = inverse_ref(edge_matrix(ref), n);
   std::vector<double> s(n * n, 0.0);
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
-      for (int k = 0; k < n; ++k) s[i * n + j] += a[i * n + k] * winv[k * n + j];
+      for (int k = 0; k < n; ++k)
+        s[i * n + j] += a[i * n + k] * winv[k * n + j];
   double frob = 0;
-  for (double x : s) frob += x * x;
+  for (double x : s)
+    frob += x * x;
   return n * std::pow(std::abs(det_ref(s, n)), 2.0 / n) / frob;
 }
 
@@ -121,8 +139,9 @@ std::vector<int> identity(int dim) {
 
 } // namespace
 
-TEST_CASE("signed volume is 1/n! for the cartesian simplex and flips sign with two swapped vertices",
-          "[measure][2d][3d][4d]") {
+TEST_CASE(
+    "signed volume is 1/n! for the cartesian simplex and flips sign with two swapped vertices",
+    "[measure][2d][3d][4d]") {
   const int dim = GENERATE(2, 3, 4);
   const std::vector<double> p = simplex_points(generate_simplex(dim, SimplexShape::Cartesian));
   const double fact = dim == 2 ? 2 : dim == 3 ? 6 : 24;
@@ -147,7 +166,8 @@ TEST_CASE("mean ratio is 1 for the equilateral simplex and invariant under permu
     CHECK(mean_ratio(permuted(p, perm, dim).data(), dim) == Approx(q).epsilon(1e-12));
   } while (std::next_permutation(perm.begin(), perm.end()));
   std::vector<double> scaled = p;
-  for (double &x : scaled) x = 1e-3 * x + 5.0;
+  for (double &x : scaled)
+    x = 1e-3 * x + 5.0;
   CHECK(mean_ratio(scaled.data(), dim) == Approx(q).epsilon(1e-9));
 }
 
@@ -157,7 +177,8 @@ TEST_CASE("mean ratio equals Knupp's definition with S = A W^-1 computed literal
   const std::vector<double> ref = simplex_points(generate_simplex(dim, SimplexShape::Equilateral));
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     const std::vector<double> p = simplex_points(generate_simplex(dim, SimplexShape::Random, seed));
-    CHECK(mean_ratio(p.data(), dim) == Approx(mean_ratio_by_definition(p, ref, dim)).epsilon(1e-10));
+    CHECK(mean_ratio(p.data(), dim) ==
+          Approx(mean_ratio_by_definition(p, ref, dim)).epsilon(1e-10));
   }
   const std::vector<double> c = simplex_points(generate_simplex(dim, SimplexShape::Cartesian));
   CHECK(mean_ratio(c.data(), dim) == Approx(mean_ratio_by_definition(c, ref, dim)).epsilon(1e-10));
@@ -207,7 +228,8 @@ TEST_CASE("similarity classes: a Kuhn mesh is one class; equilateral and cartesi
 
   Mesh two = generate_simplex(dim, SimplexShape::Equilateral);
   const Mesh cart = generate_simplex(dim, SimplexShape::Cartesian);
-  for (VertexId v : cart.cells) two.cells.push_back(v + VertexId(two.num_vertices()));
+  for (VertexId v : cart.cells)
+    two.cells.push_back(v + VertexId(two.num_vertices()));
   two.coords.insert(two.coords.end(), cart.coords.begin(), cart.coords.end());
   CHECK(count_similarity_classes(two) == 2);
   CHECK(count_similarity_classes(Mesh{}) == 0);
