@@ -158,6 +158,7 @@ int run_refine(const RefineArgs &a) {
 
   RefineLimits limits;
   if (a.max_elements) limits.max_cells = a.max_elements;
+  limits.cancel = &g_interrupted;
   bool limit_reached = false;
   int done = 0;
   std::size_t total_bisections = 0;
@@ -166,6 +167,7 @@ int run_refine(const RefineArgs &a) {
     auto t0 = std::chrono::steady_clock::now();
     std::vector<CellId> selected = select_cells(mesh, *region);
     RefineResult r = refine(mesh, selected, limits);
+    if (r.cancelled) break;
     if (r.limit_reached) {
       limit_reached = true;
       if (!a.quiet)

@@ -76,6 +76,7 @@ private:
 };
 
 struct LimitReached {};
+struct Cancelled {};
 
 template <int Dim> class Refiner {
   static constexpr int N = Dim + 1;
@@ -86,7 +87,7 @@ public:
         nv0_(mesh.num_vertices()) {
     // The undo log costs memory: keep it only when a limit could trip.
     logging_ = limits.max_cells != std::numeric_limits<std::size_t>::max() ||
-               nv0_ + 16 * nc0_ >= limits.max_vertices;
+               nv0_ + 16 * nc0_ >= limits.max_vertices || limits.cancel;
   }
 
   RefineResult run(std::vector<CellId> work) {
@@ -96,6 +97,7 @@ public:
       std::vector<std::uint8_t> flag;
       std::vector<CellId> candidates;
       while (!work.empty()) {
+        if (limits_.cancel && limits_.cancel->load()) throw Cancelled{};
         const std::size_t cells_before = m_.num_cells(), verts_before = m_.num_vertices();
         reserve(work.size());
         for (CellId c : work) bisect(c);
@@ -127,6 +129,10 @@ public:
     } catch (const LimitReached &) {
       undo();
       result.limit_reached = true;
+      return result;
+    } catch (const Cancelled &) {
+      undo();
+      result.cancelled = true;
       return result;
     }
     finish();

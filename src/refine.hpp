@@ -4,6 +4,7 @@
 #include "mesh.hpp"
 #include "region.hpp"
 
+#include <atomic>
 #include <cstddef>
 #include <limits>
 #include <vector>
@@ -17,6 +18,8 @@ struct RefineLimits {
   std::size_t max_cells = std::numeric_limits<std::size_t>::max();
   // Largest vertex count ids may reach (kNoVertex is reserved); lowered in tests.
   std::size_t max_vertices = std::numeric_limits<VertexId>::max() - 1;
+  // Checked between passes; when set, the iteration is undone (Ctrl-C).
+  const std::atomic<bool> *cancel = nullptr;
 };
 
 struct RefineResult {
@@ -24,6 +27,7 @@ struct RefineResult {
   std::size_t bisections = 0;     // all bisections, closure included
   std::size_t closure_passes = 0; // passes after the first
   bool limit_reached = false;     // the iteration was undone: it would pass a limit
+  bool cancelled = false;         // the iteration was undone: limits.cancel was set
 };
 
 // Bisects every cell of `selected` (ids of a marked mesh, no duplicates), then
