@@ -84,7 +84,7 @@ template <int Dim> class Refiner {
 public:
   Refiner(Mesh &mesh, const RefineLimits &limits)
       : m_(mesh), order_(edge_order(mesh)), limits_(limits), nc0_(mesh.num_cells()),
-        nv0_(mesh.num_vertices()) {
+        nv0_(mesh.num_vertices()), endpoint_(mesh.num_vertices(), 0) {
     // The undo log costs memory: keep it only when a limit could trip.
     logging_ = limits.max_cells != std::numeric_limits<std::size_t>::max() ||
                nv0_ + 16 * nc0_ >= limits.max_vertices || limits.cancel;
@@ -95,6 +95,7 @@ public:
     result.selected = work.size();
     try {
       std::vector<std::uint8_t> flag;
+      std::vector<std::uint64_t> seen;
       std::vector<CellId> candidates;
       while (!work.empty()) {
         if (limits_.cancel && limits_.cancel->load()) throw Cancelled{};
@@ -104,8 +105,18 @@ public:
         result.bisections += work.size();
         // Candidates for the next pass: the children just made, and every cell
         // holding both ends of an edge bisected in this pass (ALGORITHMS §6).
-        candidates.assign(work.begin(), work.end());
-        for (std::size_t c = cells_before; c < m_.num_cells(); ++c) candidates.push_back(CellId(c));
+        // A bit per cell keeps each candidate once.
+        seen.assign((m_.num_cells() + 63) / 64, 0);
+        candidates.clear();
+        auto add = [&](std::size_t c) {
+          std::uint64_t bit = std::uint64_t(1) << (c & 63);
+          if (!(seen[c >> 6] & bit)) {
+            seen[c >> 6] |= bit;
+            candidates.push_back(CellId(c));
+          }
+        };
+        for (CellId c : work) add(c);
+        for (std::size_t c = cells_before; c < m_.num_cells(); ++c) add(c);
         if (m_.num_vertices() > verts_before) {
           flag.assign(m_.num_vertices(), 0);
           for (std::size_t v = verts_before; v < m_.num_vertices(); ++v) {
@@ -116,11 +127,9 @@ public:
             const VertexId *x = m_.cell(CellId(c));
             int hits = 0;
             for (int i = 0; i < N; ++i) hits += flag[x[i]];
-            if (hits >= 2) candidates.push_back(CellId(c));
+            if (hits >= 2) add(c);
           }
         }
-        std::sort(candidates.begin(), candidates.end());
-        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
         work.clear();
         for (CellId c : candidates)
           if (has_hanging_edge(c)) work.push_back(c);
@@ -143,7 +152,9 @@ private:
   bool has_hanging_edge(CellId c) const {
     const VertexId *x = m_.cell(c);
     for (const LocalEdge &e : kLocalEdges<Dim>)
-      if (mids_.find(MidpointMap::key(x[e.first], x[e.second])) != kNoVertex) return true;
+      if (endpoint_[x[e.first]] && endpoint_[x[e.second]] &&
+          mids_.find(MidpointMap::key(x[e.first], x[e.second])) != kNoVertex)
+        return true;
     return false;
   }
 
@@ -173,6 +184,8 @@ private:
     m_.coords.insert(m_.coords.end(), mid, mid + Dim);
     parents_.push_back(a);
     parents_.push_back(b);
+    endpoint_.push_back(0);
+    endpoint_[a] = endpoint_[b] = 1;
     return next;
   }
 
@@ -289,6 +302,7 @@ private:
   MidpointMap mids_;
   std::vector<CellId> origin_;    // per appended cell: the input cell it descends from
   std::vector<VertexId> parents_; // per new vertex: the two ends of its edge
+  std::vector<std::uint8_t> endpoint_; // per vertex: 1 if an end of an edge bisected so far
   std::vector<UndoEntry> log_;
 };
 
