@@ -91,3 +91,35 @@ TEST_CASE("4D: Stage 1 leaves every grandchild a Maubach tuple with tag 2", "[re
   }
   REQUIRE(grandchildren >= 2);
 }
+
+TEST_CASE("4D uniform: min and max quality cycle with period 4; classes within 1536", "[refine][4d][quality]") {
+  for (SimplexShape shape : {SimplexShape::Equilateral, SimplexShape::Random}) {
+    for (Marking mk : {Marking::Longest, Marking::Index, Marking::Sorted}) {
+      Mesh m = generate_simplex(4, shape, 2);
+      mark_mesh(m, mk);
+      std::vector<double> qmin, qmax;
+      Mesh all = m;
+      const int iterations = 18;
+      for (int it = 1; it <= iterations; ++it) {
+        refine_uniform(m);
+        QualitySummary q = quality_summary(m);
+        qmin.push_back(q.min);
+        qmax.push_back(q.max);
+        if (it <= 14) { // classes over the first 14 generations (32k cells)
+          all.coords = m.coords;
+          all.cells.insert(all.cells.end(), m.cells.begin(), m.cells.end());
+        }
+      }
+      all.stage.clear();
+      std::size_t classes = count_similarity_classes(all);
+      INFO("shape " << int(shape) << " marking " << marking_name(mk) << " classes " << classes);
+      REQUIRE(classes <= (mk == Marking::Sorted ? 384u : 1536u));
+      // Stage 1 takes two bisections, then Maubach's cycle of length 4, once
+      // every class has appeared (iteration 10 onwards for a random pentatope).
+      for (int k = 10; k + 4 < iterations; ++k) {
+        REQUIRE(qmin[k] == Approx(qmin[k + 4]).epsilon(1e-9));
+        REQUIRE(qmax[k] == Approx(qmax[k + 4]).epsilon(1e-9));
+      }
+    }
+  }
+}
