@@ -23,14 +23,16 @@ struct CheckResult {
 
 // Checks: every facet shared by at most two cells; no degenerate cell; across
 // every interior facet the two opposite vertices lie on opposite sides (no
-// inverted or folded cell); and, when `original` is given, volume, boundary
+// inverted or folded cell); no hanging node (a vertex on a boundary facet it
+// does not belong to); and, when `original` is given, volume, boundary
 // measure (relative tolerance 1e-9) and Euler characteristic unchanged.
 CheckResult check_conformity(const Mesh &mesh, const Invariants *original = nullptr);
 
 // Validates a freshly read mesh and orients every cell positively. Throws
 // InputError naming `path`: NaN/Inf coordinates, ids out of range, repeated
 // vertex in a cell, zero-volume cells, a facet shared by three or more cells,
-// a hanging node (a vertex lying inside an edge of a cell not containing it).
+// a hanging node (a vertex lying on a boundary facet it does not belong to,
+// found with a grid over the boundary vertices).
 void prepare_input(Mesh &mesh, const std::string &path);
 
 } // namespace bisect
