@@ -106,11 +106,42 @@ void write_output_mesh(const std::string &path, Mesh &mesh) {
 
 // ---------------------------------------------------------------- refine ---
 
+// Memory the machine can still give, from /proc/meminfo (0 when unknown).
+double available_bytes() {
+  std::ifstream f("/proc/meminfo");
+  std::string key;
+  double kb = 0;
+  std::string unit;
+  while (f >> key >> kb >> unit)
+    if (key == "MemAvailable:") return kb * 1024.0;
+  return 0;
+}
+
+// Non-empty when the next iteration would likely not fit in memory. The
+// estimate: each selected cell costs about four new cells with closure, and a
+// cell costs its ids, state and arrays twice over while vectors grow.
+std::string memory_shortfall(const Mesh &mesh, std::size_t selected, double max_gib) {
+  double per_cell = 2.5 * (4.0 * (mesh.dim + 1) + 2.0) + 8.0;
+  for (const DataArray &a : mesh.cell_data) per_cell += 2.0 * 8.0 * a.components;
+  // --max-memory bounds the whole mesh; otherwise what it adds must fit in
+  // the memory available now.
+  double need = per_cell * 4.0 * double(selected);
+  if (max_gib > 0) need += per_cell * double(mesh.num_cells());
+  double avail = max_gib > 0 ? max_gib * 1073741824.0 : available_bytes();
+  if (avail <= 0 || need < 0.9 * avail) return {};
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "it would need about %.2f GiB %s, %.2f GiB %s",
+                need / 1073741824.0, max_gib > 0 ? "in all" : "more memory",
+                avail / 1073741824.0, max_gib > 0 ? "allowed by --max-memory" : "available");
+  return buf;
+}
+
 struct RefineArgs {
   std::string input, region, output, csv;
   int iterations = 1;
   std::string marking;
   std::size_t max_elements = 0;
+  double max_memory_gib = 0;
   bool json = false, quiet = false, force = false, check = false;
 };
 
@@ -166,6 +197,11 @@ int run_refine(const RefineArgs &a) {
     if (g_interrupted) break;
     auto t0 = std::chrono::steady_clock::now();
     std::vector<CellId> selected = select_cells(mesh, *region);
+    if (std::string why = memory_shortfall(mesh, selected.size(), a.max_memory_gib); !why.empty()) {
+      limit_reached = true;
+      if (!a.quiet) std::cerr << "bisect: stopping before iteration " << it << ": " << why << "\n";
+      break;
+    }
     RefineResult r = refine(mesh, selected, limits);
     if (r.cancelled) break;
     if (r.limit_reached) {
@@ -386,6 +422,10 @@ int main(int argc, char **argv) {
       ->check(CLI::IsMember({"index", "longest", "sorted"}));
   refine_cmd->add_option("--max-elements", ra.max_elements,
                          "Stop before an iteration would make more cells than this (exit 3)");
+  refine_cmd->add_option("--max-memory", ra.max_memory_gib,
+                         "Stop (exit 3) before an iteration estimated to need more than this many "
+                         "GiB; default: the memory available now")
+      ->check(CLI::PositiveNumber);
   refine_cmd->add_flag("--json", ra.json, "Print a JSON summary on stdout");
   refine_cmd->add_flag("--quiet,-q", ra.quiet, "No progress output on stderr");
   refine_cmd->add_flag("--force,-f", ra.force, "Overwrite existing output files (never the input)");

@@ -7,6 +7,11 @@ grep -q "max-elements" "$WORK/err" || fail "the limit is named"
 expect_exit 0 "$BISECT" check capped.vtu --against "$ROOT/data/ball.msh"
 cells=$("$BISECT" info capped.vtu | sed -n 's/^cells: //p')
 (( cells <= 20000 )) || fail "capped mesh has $cells cells"
+# --max-memory: an iteration estimated not to fit is not started (exit 3).
+expect_exit 3 "$BISECT" refine "$ROOT/data/ball.msh" --region "$ROOT/data/regions/hemisphere.json" \
+  -n 40 --max-memory 0.01 -o mem.vtu
+grep -q "GiB" "$WORK/err" || fail "the memory estimate is named"
+expect_exit 0 "$BISECT" check mem.vtu --against "$ROOT/data/ball.msh"
 # An existing output is left alone without --force.
 echo "precious" > keep.vtu
 expect_exit 1 "$BISECT" refine "$ROOT/data/square.msh" --region "$ROOT/data/regions/circle.json" -o keep.vtu
