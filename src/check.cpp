@@ -189,30 +189,6 @@ template <int Dim> double squared_distance(const double *p, const double *q) {
   return s;
 }
 
-// Determinant of an n x n row-major matrix (n <= 4), destroys `a`.
-double small_determinant(double *a, int n) {
-  double det = 1;
-  for (int k = 0; k < n; ++k) {
-    int p = k;
-    for (int i = k + 1; i < n; ++i)
-      if (std::abs(a[i * n + k]) > std::abs(a[p * n + k]))
-        p = i;
-    if (a[p * n + k] == 0)
-      return 0;
-    if (p != k) {
-      for (int j = 0; j < n; ++j)
-        std::swap(a[k * n + j], a[p * n + j]);
-      det = -det;
-    }
-    det *= a[k * n + k];
-    for (int i = k + 1; i < n; ++i) {
-      const double f = a[i * n + k] / a[k * n + k];
-      for (int j = k + 1; j < n; ++j)
-        a[i * n + j] -= f * a[k * n + j];
-    }
-  }
-  return det;
-}
 
 // Solves the n x n system G x = b (n <= 3) by elimination with pivoting;
 // false when G is singular.
@@ -263,7 +239,7 @@ template <int Dim> double facet_measure(const double *p) {
   double fact = 1;
   for (int i = 2; i <= n; ++i)
     fact *= i;
-  return std::sqrt(std::max(0.0, small_determinant(g, n))) / fact;
+  return std::sqrt(std::max(0.0, determinant(g, n))) / fact;
 }
 
 template <int Dim> double longest_squared_edge(const double *p) {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <type_traits>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
@@ -228,6 +229,22 @@ template <class F> decltype(auto) dispatch(int dim, F &&f) {
 }
 
 } // namespace
+
+double determinant(const double *a, int n) {
+  auto run = [&](auto dim) {
+    constexpr int D = decltype(dim)::value;
+    std::array<double, D * D> m;
+    std::copy(a, a + D * D, m.begin());
+    return determinant<D>(m);
+  };
+  switch (n) {
+  case 1: return a[0];
+  case 2: return run(std::integral_constant<int, 2>{});
+  case 3: return run(std::integral_constant<int, 3>{});
+  case 4: return run(std::integral_constant<int, 4>{});
+  }
+  return 0;
+}
 
 double signed_volume(const double *verts, int dim) {
   return dispatch(dim, [&]<int D>() { return signed_volume_t<D>(verts); });

@@ -8,6 +8,9 @@
 
 namespace bisect {
 
+// Determinant of an n x n row-major matrix, n in 1..4.
+double determinant(const double *a, int n);
+
 // Signed n-volume of the simplex (x0..xn): det[x1-x0, ..., xn-x0] / n!.
 // `verts` holds dim+1 points of dim coordinates each.
 double signed_volume(const double *verts, int dim);

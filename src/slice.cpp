@@ -1,0 +1,254 @@
+// Sections of 4D meshes by axis-aligned hyperplanes.
+//
+// Every pentatope is classified by the side of each vertex: -1 (x < value),
+// 0 (on the hyperplane), +1. When both sides are present the hyperplane meets
+// the interior and the section is a 3-polytope whose vertices ("cut points")
+// are the on-plane vertices and one point per edge joining the two sides:
+//   sides (-,0,+) = (1,0,4) or (4,0,1), (1,1,3), (2,2,1), (1,3,1) ...  tetrahedron
+//                   (2,1,2)                                            square pyramid
+//                   (2,0,3) or (3,0,2)                                 triangular prism
+// A cut point is keyed by the sorted vertex-id pair of its edge, (v, v) for a
+// vertex v on the plane; keys are global, so neighbours share cut points.
+//
+// Each polytope is cut into tets by the pulling triangulation: take its
+// smallest-key vertex v, triangulate recursively every facet not containing
+// v, and cone those pieces from v. The pulling triangulation restricted to a
+// face is the pulling triangulation of that face, which depends only on the
+// face's own keys, so two pentatopes cut their shared quadrilateral the same
+// way (by the diagonal through its smallest-key vertex). The faces of the
+// section are the sections of the pentatope's faces, so the recursion runs on
+// vertex subsets of the pentatope.
+//
+// A pentatope with one side empty meets the plane in the face spanned by its
+// on-plane vertices; only a whole tetrahedral facet (4 on-plane vertices)
+// matters, and it is produced by one of the (at most two) pentatopes sharing
+// it: the one on the side x >= value when there is one.
+#include "slice.hpp"
+
+#include "measure.hpp"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cassert>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace bisect {
+namespace {
+
+using Key = std::uint64_t; // (smaller id << 32) | larger id
+using Tet = std::array<Key, 4>;
+
+Key point_key(VertexId a, VertexId b) {
+  if (b < a) std::swap(a, b);
+  return (Key(a) << 32) | Key(b);
+}
+VertexId key_first(Key k) { return VertexId(k >> 32); }
+VertexId key_second(Key k) { return VertexId(k & 0xffffffffu); }
+
+// One pentatope: its global ids and the side of each vertex.
+struct Pentatope {
+  std::array<VertexId, 5> ids{};
+  std::array<int, 5> side{};
+};
+
+bool crosses(const Pentatope &p, unsigned mask) {
+  bool neg = false, pos = false;
+  for (int i = 0; i < 5; ++i)
+    if (mask >> i & 1u) neg |= p.side[i] < 0, pos |= p.side[i] > 0;
+  return neg && pos;
+}
+
+// The vertices of the section of the face `mask` (a subset of the pentatope's
+// vertices): the on-plane vertices and, when the face crosses the plane, one
+// point per edge joining the two sides.
+std::vector<Key> section_points(const Pentatope &p, unsigned mask) {
+  std::vector<Key> out;
+  for (int i = 0; i < 5; ++i) {
+    if (!(mask >> i & 1u)) continue;
+    if (p.side[i] == 0) out.push_back(point_key(p.ids[i], p.ids[i]));
+    for (int j = i + 1; j < 5; ++j)
+      if ((mask >> j & 1u) && p.side[i] * p.side[j] < 0) out.push_back(point_key(p.ids[i], p.ids[j]));
+  }
+  return out;
+}
+
+// Dimension of the section of face `mask`: one less than the face when the
+// plane crosses it, else that of the face spanned by its on-plane vertices.
+int section_dim(const Pentatope &p, unsigned mask) {
+  if (crosses(p, mask)) return std::popcount(mask) - 2;
+  int zeros = 0;
+  for (int i = 0; i < 5; ++i)
+    zeros += (mask >> i & 1u) && p.side[i] == 0;
+  return zeros - 1;
+}
+
+// Pulling triangulation of the k-dimensional section of face `mask` into
+// k-simplices (k+1 keys each).
+std::vector<std::vector<Key>> pulling(const Pentatope &p, unsigned mask, int k) {
+  std::vector<Key> pts = section_points(p, mask);
+  if (int(pts.size()) == k + 1) return {pts};
+  const Key apex = *std::min_element(pts.begin(), pts.end());
+  std::vector<std::vector<Key>> out, seen_facets;
+  for (int u = 0; u < 5; ++u) {
+    if (!(mask >> u & 1u)) continue;
+    const unsigned sub = mask & ~(1u << u);
+    if (section_dim(p, sub) != k - 1) continue; // not a facet of the section
+    std::vector<Key> facet = section_points(p, sub);
+    std::sort(facet.begin(), facet.end());
+    if (std::binary_search(facet.begin(), facet.end(), apex)) continue;
+    // Two faces of the pentatope can have the same section (the on-plane face).
+    if (std::find(seen_facets.begin(), seen_facets.end(), facet) != seen_facets.end()) continue;
+    seen_facets.push_back(facet);
+    for (std::vector<Key> &piece : pulling(p, sub, k - 1)) {
+      piece.insert(piece.begin(), apex);
+      out.push_back(std::move(piece));
+    }
+  }
+  return out;
+}
+
+Pentatope classify(const Mesh &mesh, CellId c, int axis, double value) {
+  Pentatope p;
+  for (int i = 0; i < 5; ++i) {
+    p.ids[i] = mesh.cell(c)[i];
+    const double x = mesh.point(p.ids[i])[axis];
+    p.side[i] = x > value ? 1 : x < value ? -1 : 0;
+  }
+  return p;
+}
+
+int count_side(const Pentatope &p, int s) {
+  return int(std::count(p.side.begin(), p.side.end(), s));
+}
+
+// For every tetrahedral facet lying in the plane, the pentatope that produces
+// it: one on the side x >= value when there is one.
+std::map<std::array<VertexId, 4>, CellId> in_plane_owners(const Mesh &mesh, int axis, double value) {
+  std::map<std::array<VertexId, 4>, CellId> owner;
+  std::map<std::array<VertexId, 4>, bool> owner_above;
+  for (std::size_t c = 0; c < mesh.num_cells(); ++c) {
+    const Pentatope p = classify(mesh, CellId(c), axis, value);
+    if (count_side(p, 0) != 4) continue;
+    std::array<VertexId, 4> facet{};
+    int n = 0;
+    for (int i = 0; i < 5; ++i)
+      if (p.side[i] == 0) facet[n++] = p.ids[i];
+    std::sort(facet.begin(), facet.end());
+    const bool above = count_side(p, 1) == 1;
+    auto it = owner.find(facet);
+    if (it == owner.end() || (above && !owner_above[facet])) {
+      owner[facet] = CellId(c);
+      owner_above[facet] = above;
+    }
+  }
+  return owner;
+}
+
+// The tets of pentatope c, as cut-point keys.
+std::vector<Tet> cut_cell(const Mesh &mesh, CellId c, int axis, double value,
+                          const std::map<std::array<VertexId, 4>, CellId> &owners) {
+  const Pentatope p = classify(mesh, c, axis, value);
+  std::vector<Tet> tets;
+  if (crosses(p, 0x1fu)) {
+    for (const std::vector<Key> &piece : pulling(p, 0x1fu, 3)) {
+      assert(piece.size() == 4);
+      tets.push_back({piece[0], piece[1], piece[2], piece[3]});
+    }
+  } else if (count_side(p, 0) == 4) {
+    std::vector<Key> pts = section_points(p, 0x1fu);
+    std::array<VertexId, 4> facet{};
+    for (int i = 0; i < 4; ++i)
+      facet[i] = key_first(pts[i]);
+    std::sort(facet.begin(), facet.end());
+    if (owners.at(facet) == c) tets.push_back({pts[0], pts[1], pts[2], pts[3]});
+  }
+  return tets;
+}
+
+// Builds the output vertices on demand: coordinates and point data of a cut
+// point, interpolated along its edge (computed once per key).
+struct VertexMaker {
+  const Mesh &in;
+  Mesh &out;
+  int axis;
+  double value;
+  std::unordered_map<Key, VertexId> ids;
+
+  VertexId get(Key k) {
+    auto [it, fresh] = ids.try_emplace(k, VertexId(ids.size()));
+    if (fresh) add(k);
+    return it->second;
+  }
+
+  void add(Key k) {
+    const VertexId a = key_first(k), b = key_second(k);
+    const double *pa = in.point(a), *pb = in.point(b);
+    // Parameter along a -> b (a < b) where x[axis] reaches the value.
+    const double lambda = a == b ? 0.0 : (value - pa[axis]) / (pb[axis] - pa[axis]);
+    for (int d = 0; d < 4; ++d)
+      if (d != axis) out.coords.push_back(a == b ? pa[d] : pa[d] + lambda * (pb[d] - pa[d]));
+    for (std::size_t n = 0; n < in.point_data.size(); ++n) {
+      const DataArray &src = in.point_data[n];
+      for (int j = 0; j < src.components; ++j) {
+        const double va = src.values[std::size_t(a) * src.components + j];
+        const double vb = src.values[std::size_t(b) * src.components + j];
+        out.point_data[n].values.push_back(a == b ? va : (1 - lambda) * va + lambda * vb);
+      }
+    }
+  }
+};
+
+// Appends tet t (as output ids), positively oriented.
+void emit_tet(Mesh &out, std::array<VertexId, 4> t) {
+  double pts[12];
+  for (int i = 0; i < 4; ++i)
+    std::copy(out.point(t[i]), out.point(t[i]) + 3, pts + 3 * i);
+  if (signed_volume(pts, 3) < 0) std::swap(t[2], t[3]);
+  out.cells.insert(out.cells.end(), t.begin(), t.end());
+}
+
+void copy_cell_data(const Mesh &in, const std::vector<CellId> &parent, Mesh &out) {
+  for (const DataArray &src : in.cell_data) {
+    if (src.name.rfind("bisect:", 0) == 0) continue; // bisection state of the 4D cells
+    DataArray dst{src.name, src.components, {}};
+    dst.values.reserve(parent.size() * src.components);
+    for (CellId c : parent)
+      for (int j = 0; j < src.components; ++j)
+        dst.values.push_back(src.values[std::size_t(c) * src.components + j]);
+    out.cell_data.push_back(std::move(dst));
+  }
+}
+
+} // namespace
+
+Mesh slice_mesh(const Mesh &mesh4, int axis, double value) {
+  if (mesh4.dim != 4)
+    throw InputError("", "slice: needs a 4D mesh, got dimension " + std::to_string(mesh4.dim));
+  if (axis < 0 || axis > 3)
+    throw InputError("", "slice: axis must be 0, 1, 2 or 3 (t), got " + std::to_string(axis));
+
+  Mesh out;
+  out.dim = 3;
+  for (const DataArray &a : mesh4.point_data)
+    out.point_data.push_back({a.name, a.components, {}});
+
+  const auto owners = in_plane_owners(mesh4, axis, value);
+  VertexMaker maker{mesh4, out, axis, value, {}};
+  std::vector<CellId> parent;
+  for (std::size_t c = 0; c < mesh4.num_cells(); ++c) {
+    for (const Tet &t : cut_cell(mesh4, CellId(c), axis, value, owners)) {
+      emit_tet(out, {maker.get(t[0]), maker.get(t[1]), maker.get(t[2]), maker.get(t[3])});
+      parent.push_back(CellId(c));
+    }
+  }
+  copy_cell_data(mesh4, parent, out);
+  return out;
+}
+
+} // namespace bisect
