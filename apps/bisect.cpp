@@ -8,6 +8,7 @@
 #include "measure.hpp"
 #include "refine.hpp"
 #include "region.hpp"
+#include "slice.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -143,7 +144,26 @@ struct RefineArgs {
   std::size_t max_elements = 0;
   double max_memory_gib = 0;
   bool json = false, quiet = false, force = false, check = false;
+  std::vector<double> slices; // t values: 3D sections of the final 4D mesh
 };
+
+// "<output stem>.t<value>.vtu" beside the output.
+std::string slice_path(const std::string &output, const char *axis, double value) {
+  fs::path p(output);
+  std::ostringstream name;
+  name << p.stem().string() << "." << axis << value << ".vtu";
+  return (p.parent_path() / name.str()).string();
+}
+
+void write_slice(const Mesh &mesh, int axis, double value, const std::string &path, bool quiet) {
+  Mesh s = slice_mesh(mesh, axis, value);
+  // The 4D bisection state means nothing on a 3D section.
+  std::erase_if(s.cell_data, [](const DataArray &d) { return d.name.rfind("bisect:", 0) == 0; });
+  write_mesh(path, s);
+  if (!quiet)
+    std::cerr << "bisect: wrote " << path << " (" << with_commas(s.num_cells())
+              << " tetrahedra: the section " << "xyzt"[axis] << " = " << value << ")\n";
+}
 
 std::string default_output(const std::string &input) {
   fs::path p(input);
@@ -163,10 +183,13 @@ int run_refine(const RefineArgs &a) {
   std::string csv = a.csv.empty() ? default_csv(out) : a.csv;
   refuse_overwrite(out, a.input, a.force);
   refuse_overwrite(csv, a.input, a.force);
+  for (double t : a.slices) refuse_overwrite(slice_path(out, "t", t), a.input, a.force);
   if (fs::path(out).extension() != ".vtu" && fs::path(out).extension() != ".msh")
     throw UsageError(out + ": output must end in .vtu or .msh");
 
   Mesh mesh = load_mesh(a.input, marking, a.quiet);
+  if (!a.slices.empty() && mesh.dim != 4)
+    throw UsageError("--slices needs a 4D mesh; " + a.input + " is " + std::to_string(mesh.dim) + "D");
   auto region = read_region(a.region, mesh.dim);
   Invariants before;
   if (a.check) before = measure_invariants(mesh);
@@ -245,6 +268,7 @@ int run_refine(const RefineArgs &a) {
   }
   write_output_mesh(out, mesh);
   write_text_file(csv, rows.str());
+  for (double t : a.slices) write_slice(mesh, 3, t, slice_path(out, "t", t), a.quiet);
   double total = seconds_since(t_start);
   if (a.json) {
     nlohmann::json j;
@@ -426,12 +450,31 @@ int main(int argc, char **argv) {
                          "Stop (exit 3) before an iteration estimated to need more than this many "
                          "GiB; default: the memory available now")
       ->check(CLI::PositiveNumber);
+  refine_cmd->add_option("--slices", ra.slices,
+                         "4D only: also write the sections t = T1,T2,... of the final mesh as 3D "
+                         "meshes <output stem>.t<T>.vtu")
+      ->delimiter(',');
   refine_cmd->add_flag("--json", ra.json, "Print a JSON summary on stdout");
   refine_cmd->add_flag("--quiet,-q", ra.quiet, "No progress output on stderr");
   refine_cmd->add_flag("--force,-f", ra.force, "Overwrite existing output files (never the input)");
   refine_cmd->add_flag("--check", ra.check,
                        "Check conformity, volume, boundary and Euler characteristic at the end "
                        "(exit 2 on failure)");
+
+  std::string slice_in, slice_out, slice_axis = "t";
+  double slice_value = 0;
+  bool slice_force = false;
+  auto *slice_cmd = app.add_subcommand(
+      "slice", "Cut a 4D mesh by the hyperplane {axis = value} into a conforming 3D tetrahedral "
+               "mesh for ParaView (prisms are split into three tetrahedra).");
+  slice_cmd->footer("Example: bisect slice hypercube-25.vtu --t 0.5 -o section.vtu");
+  slice_cmd->add_option("input", slice_in, "4D mesh (.vtu)")->required();
+  auto *t_opt = slice_cmd->add_option("--t", slice_value, "Shorthand for --axis t --value VALUE");
+  slice_cmd->add_option("--axis", slice_axis, "x, y, z or t (default t)")
+      ->check(CLI::IsMember({"x", "y", "z", "t"}));
+  slice_cmd->add_option("--value", slice_value, "Where the hyperplane cuts the axis")->excludes(t_opt);
+  slice_cmd->add_option("--output,-o", slice_out, "Output 3D mesh (.vtu or .msh)")->required();
+  slice_cmd->add_flag("--force,-f", slice_force, "Overwrite an existing file");
 
   std::string info_in;
   auto *info_cmd = app.add_subcommand("info", "Dimension, counts, bounding box, volume, quality.");
@@ -497,6 +540,16 @@ int main(int argc, char **argv) {
   try {
     if (*refine_cmd) return run_refine(ra);
     if (*info_cmd) return run_info(info_in);
+    if (*slice_cmd) {
+      refuse_overwrite(slice_out, slice_in, slice_force);
+      Mesh mesh = read_mesh(slice_in);
+      prepare_input(mesh, slice_in);
+      if (mesh.dim != 4)
+        throw InputError(slice_in, "slice needs a 4D mesh, this one is " + std::to_string(mesh.dim) + "D");
+      int axis = int(std::string("xyzt").find(slice_axis[0]));
+      write_slice(mesh, axis, slice_value, slice_out, false);
+      return kExitOk;
+    }
     if (*check_cmd) return run_check(check_in, check_against);
     if (*quality_cmd) return run_quality(quality_in, quality_classes, quality_bins);
     if (*gen_simplex) {

@@ -1,0 +1,24 @@
+# 4D: refine a Kuhn hypercube around the moving sphere, write t-slices, and
+# check each slice is a conforming 3D mesh with the section's volume.
+source "$(dirname "$0")/lib.bash"
+cd "$WORK"
+expect_exit 0 "$BISECT" generate kuhn --dim 4 --cells 2 -o cube.vtu
+expect_exit 0 "$BISECT" refine cube.vtu --region "$ROOT/data/regions/moving-sphere.json" -n 6 \
+  -m longest -o cube6.vtu --slices 0,0.5,1 --quiet
+expect_exit 0 "$BISECT" check cube6.vtu --against cube.vtu
+for t in 0 0.5 1; do
+  [[ -f cube6.t$t.vtu ]] || fail "slice t=$t missing"
+  expect_exit 0 "$BISECT" check cube6.t$t.vtu
+  expect_exit 0 "$BISECT" info cube6.t$t.vtu
+  grep -q "^volume: 1$" "$WORK/out" || fail "slice t=$t volume is not 1"
+  grep -q "^boundary measure: 6$" "$WORK/out" || fail "slice t=$t boundary is not 6"
+done
+# Refining the 4D output continues its state; slicing by hand works too.
+expect_exit 0 "$BISECT" refine cube6.vtu --region "$ROOT/data/regions/moving-sphere.json" -n 2 -o cube8.vtu --quiet
+expect_exit 0 "$BISECT" check cube8.vtu --against cube.vtu
+expect_exit 0 "$BISECT" slice cube8.vtu --axis x --value 0.3 -o x.vtu
+expect_exit 0 "$BISECT" check x.vtu
+# --slices on a 3D mesh is a usage error.
+expect_exit 1 "$BISECT" refine "$ROOT/data/ball.msh" --region "$ROOT/data/regions/sphere.json" --slices 0 -o b.vtu
+one_line_naming "4D"
+echo "slice_4d: ok"
