@@ -21,6 +21,7 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using namespace bisect;
@@ -71,7 +72,21 @@ bool same_file(const std::string &a, const std::string &b) {
   return fs::exists(b, ec) && fs::equivalent(a, b, ec);
 }
 
+// Fails early when `path` could not be written: its directory is missing or
+// not writable, or the path is a directory.
+void require_writable(const std::string &path) {
+  fs::path p(path);
+  fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw UsageError(path + ": cannot write: directory " + dir.string() + " does not exist");
+  if (fs::is_directory(p, ec)) throw UsageError(path + ": cannot write: it is a directory");
+  if (::access(dir.c_str(), W_OK) != 0)
+    throw UsageError(path + ": cannot write: directory " + dir.string() + " is not writable");
+}
+
 void refuse_overwrite(const std::string &out, const std::string &input, bool force) {
+  require_writable(out);
   if (same_file(input, out))
     throw UsageError(out + ": refusing to overwrite the input mesh; choose another -o");
   std::error_code ec;
@@ -141,7 +156,7 @@ struct RefineArgs {
   std::string input, region, output, csv;
   int iterations = 1;
   std::string marking;
-  std::size_t max_elements = 0;
+  std::int64_t max_elements = 0;
   double max_memory_gib = 0;
   bool json = false, quiet = false, force = false, check = false;
   std::vector<double> slices; // t values: 3D sections of the final 4D mesh
@@ -211,7 +226,7 @@ int run_refine(const RefineArgs &a) {
               << marking_name(mesh.marking) << "\n";
 
   RefineLimits limits;
-  if (a.max_elements) limits.max_cells = a.max_elements;
+  if (a.max_elements) limits.max_cells = std::size_t(a.max_elements);
   limits.cancel = &g_interrupted;
   bool limit_reached = false;
   int done = 0;
@@ -231,7 +246,7 @@ int run_refine(const RefineArgs &a) {
       limit_reached = true;
       if (!a.quiet)
         std::cerr << "bisect: stopping before iteration " << it << ": it would pass "
-                  << (a.max_elements ? "--max-elements " + with_commas(a.max_elements)
+                  << (a.max_elements ? "--max-elements " + with_commas(std::size_t(a.max_elements))
                                      : std::string("the 32-bit id limit"))
                   << " (" << with_commas(mesh.num_cells()) << " cells now)\n";
       break;
@@ -266,8 +281,14 @@ int run_refine(const RefineArgs &a) {
       return kExitCheck;
     }
   }
-  write_output_mesh(out, mesh);
   write_text_file(csv, rows.str());
+  try {
+    write_output_mesh(out, mesh);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(csv, ec); // never half a result
+    throw;
+  }
   for (double t : a.slices) write_slice(mesh, 3, t, slice_path(out, "t", t), a.quiet);
   double total = seconds_since(t_start);
   if (a.json) {
@@ -445,7 +466,8 @@ int main(int argc, char **argv) {
                          "longest (longest edge first), sorted ((x0<...<xn)_n)")
       ->check(CLI::IsMember({"index", "longest", "sorted"}));
   refine_cmd->add_option("--max-elements", ra.max_elements,
-                         "Stop before an iteration would make more cells than this (exit 3)");
+                         "Stop before an iteration would make more cells than this (exit 3)")
+      ->check(CLI::Range(std::int64_t(1), std::int64_t(kNoCell) - 1));
   refine_cmd->add_option("--max-memory", ra.max_memory_gib,
                          "Stop (exit 3) before an iteration estimated to need more than this many "
                          "GiB; default: the memory available now")

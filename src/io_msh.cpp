@@ -974,6 +974,9 @@ int cell_dimension(Source &src, const MshFile &f) {
     src.fail(f.non_simplex[dim].at,
              "mixed non-simplex cells: " + type_text(f.non_simplex[dim].type) + " among the " +
                  cells + " is not supported");
+  if (dim == 2 && f.non_simplex[3].at != kNone) // volume cells beside a triangle mesh
+    src.fail(f.non_simplex[3].at, "mixed non-simplex cells: " + type_text(f.non_simplex[3].type) +
+                                      " in a triangle mesh is not supported");
   if (dim == 2 && f.off_plane_at != kNone)
     src.fail(f.off_plane_at, "surface mesh in 3D is not supported: " + f.off_plane_what +
                                  " (a triangle mesh must lie in the plane z = 0)");

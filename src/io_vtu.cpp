@@ -45,6 +45,10 @@
 #include <limits>
 #include <mutex>
 #include <string>
+#include <iterator>
+#include <cstdlib>
+#include <cctype>
+#include <fstream>
 #include <vector>
 
 namespace bisect {
@@ -528,7 +532,81 @@ vtkSmartPointer<vtkUnstructuredGrid> mesh_to_grid(const Mesh &mesh) {
 
 } // namespace
 
+namespace {
+
+// VTK 9.1's XML reader reads past the end of an ASCII DataArray that holds
+// fewer values than the piece needs (or stops at a non-number) and crashes.
+// So before VTK sees the file, every ASCII array is counted and parsed here:
+// Points need 3 x NumberOfPoints values, PointData NumberOfPoints x
+// components, CellData, offsets and types NumberOfCells x components.
+std::string attribute(const std::string &tag, const std::string &name) {
+  std::string key = " " + name + "=\"";
+  std::size_t at = tag.find(key);
+  if (at == std::string::npos) return {};
+  at += key.size();
+  std::size_t end = tag.find('"', at);
+  return end == std::string::npos ? std::string() : tag.substr(at, end - at);
+}
+
+void check_ascii_arrays(const std::string &path) {
+  std::ifstream f(path, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  long long points = -1, cells = -1;
+  enum { None, InPoints, InPointData, InCellData, InCells } section = None;
+  std::size_t pos = 0;
+  while ((pos = text.find('<', pos)) != std::string::npos) {
+    std::size_t close = text.find('>', pos);
+    if (close == std::string::npos) return; // VTK reports broken XML
+    std::string tag = text.substr(pos, close - pos + 1);
+    pos = close + 1;
+    auto starts = [&](const char *t) { return tag.rfind(t, 0) == 0; };
+    if (starts("<AppendedData")) return; // raw binary follows
+    if (starts("<Piece")) {
+      points = std::atoll(attribute(tag, "NumberOfPoints").c_str());
+      cells = std::atoll(attribute(tag, "NumberOfCells").c_str());
+    } else if (starts("<Points")) section = InPoints;
+    else if (starts("<PointData")) section = InPointData;
+    else if (starts("<CellData")) section = InCellData;
+    else if (starts("<Cells")) section = InCells;
+    else if (starts("</Points") || starts("</PointData") || starts("</CellData") || starts("</Cells"))
+      section = None;
+    else if (starts("<DataArray") && attribute(tag, "format") == "ascii" && tag.back() == '>' &&
+             tag[tag.size() - 2] != '/') {
+      std::size_t end = text.find("</DataArray>", pos);
+      if (end == std::string::npos) return;
+      std::string name = attribute(tag, "Name");
+      if (name.empty()) name = section == InPoints ? "Points" : "(unnamed)";
+      long long comps = std::max(1LL, std::atoll(attribute(tag, "NumberOfComponents").c_str()));
+      long long want = -1;
+      if (section == InPoints) want = 3 * points;
+      else if (section == InPointData) want = comps * points;
+      else if (section == InCellData) want = comps * cells;
+      else if (section == InCells && (name == "offsets" || name == "types")) want = cells;
+      long long count = 0;
+      const char *p = text.c_str() + pos, *stop = text.c_str() + end;
+      while (p < stop) {
+        while (p < stop && std::isspace(static_cast<unsigned char>(*p))) ++p;
+        if (p >= stop) break;
+        char *after = nullptr;
+        std::strtod(p, &after);
+        if (after == p || (after < stop && !std::isspace(static_cast<unsigned char>(*after))))
+          throw InputError(path, "array '" + name + "': value " + std::to_string(count + 1) +
+                                     " is not a number");
+        p = after;
+        ++count;
+      }
+      if (want >= 0 && count != want)
+        throw InputError(path, "array '" + name + "' has " + std::to_string(count) +
+                                   " values, expected " + std::to_string(want));
+      pos = end;
+    }
+  }
+}
+
+} // namespace
+
 Mesh read_vtu(const std::string &path) {
+  check_ascii_arrays(path);
   vtkSmartPointer<vtkUnstructuredGrid> grid = load_grid(path);
   return grid_to_mesh(path, grid);
 }
