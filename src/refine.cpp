@@ -12,6 +12,7 @@
 #include "numbering.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <stdexcept>
 
 namespace bisect {
@@ -101,7 +102,10 @@ public:
         if (limits_.cancel && limits_.cancel->load()) throw Cancelled{};
         const std::size_t cells_before = m_.num_cells(), verts_before = m_.num_vertices();
         reserve(work.size());
+        const auto t0 = std::chrono::steady_clock::now();
         for (CellId c : work) bisect(c);
+        result.kernel_seconds +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         result.bisections += work.size();
         // Candidates for the next pass: the children just made, and every cell
         // holding both ends of an edge bisected in this pass (ALGORITHMS §6).

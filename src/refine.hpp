@@ -28,6 +28,8 @@ struct RefineResult {
   std::size_t closure_passes = 0; // passes after the first
   bool limit_reached = false;     // the iteration was undone: it would pass a limit
   bool cancelled = false;         // the iteration was undone: limits.cancel was set
+  double kernel_seconds = 0;      // time in the bisection kernel proper (the rest
+                                  // finds the cells to close)
 };
 
 // Bisects every cell of `selected` (ids of a marked mesh, no duplicates), then
