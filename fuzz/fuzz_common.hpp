@@ -41,7 +41,7 @@ inline std::string write_temp(const std::uint8_t *data, std::size_t size, const 
 // only, with a cell limit, so one input stays fast.
 inline void refine_and_check(bisect::Mesh &mesh, const bisect::Region &region, int iterations) {
   using namespace bisect;
-  if (mesh.num_cells() > 300)
+  if (mesh.num_cells() > 400)
     return;
   const Invariants before = measure_invariants(mesh);
   RefineLimits limits;
