@@ -613,6 +613,103 @@ std::string find_hanging_node(const Mesh &mesh, const std::vector<VertexId> &bnd
   return {};
 }
 
+// Cells overlapping without sharing a facet (which the facet pass cannot see):
+// in a valid mesh the centroid of a cell lies in no other cell. Centroids go
+// into a uniform grid of the mean cell extent; each cell tests the centroids
+// in the grid cells its bounding box covers. Not a proof of validity (two
+// thin crossing cells may keep their centroids apart), but cheap and exact in
+// what it reports.
+template <int Dim> std::string find_overlap(const Mesh &mesh) {
+  constexpr int N = Dim + 1;
+  const std::size_t nc = mesh.num_cells();
+  if (nc < 2) return {};
+  std::vector<double> centroid(nc * Dim, 0.0);
+  double lo[Dim], hi[Dim], h = 0;
+  std::fill(lo, lo + Dim, 1e300);
+  std::fill(hi, hi + Dim, -1e300);
+  double pts[N * Dim];
+  for (std::size_t c = 0; c < nc; ++c) {
+    gather<Dim>(mesh, mesh.cell(CellId(c)), N, pts);
+    double ext = 0;
+    for (int d = 0; d < Dim; ++d) {
+      double a = pts[d], b = pts[d], sum = 0;
+      for (int k = 0; k < N; ++k) {
+        a = std::min(a, pts[k * Dim + d]);
+        b = std::max(b, pts[k * Dim + d]);
+        sum += pts[k * Dim + d];
+      }
+      centroid[c * Dim + d] = sum / N;
+      lo[d] = std::min(lo[d], a);
+      hi[d] = std::max(hi[d], b);
+      ext = std::max(ext, b - a);
+    }
+    h += ext;
+  }
+  h /= double(nc);
+  if (!(h > 0)) return {};
+  constexpr int kBits = 64 / Dim;
+  std::int64_t ncell[Dim];
+  double size[Dim];
+  for (int d = 0; d < Dim; ++d) {
+    size[d] = std::max(h, (hi[d] - lo[d]) / double((std::uint64_t(1) << (kBits - 1)) - 1));
+    ncell[d] = std::int64_t((hi[d] - lo[d]) / size[d]) + 1;
+  }
+  auto index = [&](double x, int d) {
+    return std::int64_t(std::clamp(std::floor((x - lo[d]) / size[d]), 0.0, double(ncell[d] - 1)));
+  };
+  auto key_of = [&](const std::int64_t *idx) {
+    std::uint64_t k = 0;
+    for (int d = 0; d < Dim; ++d) k |= std::uint64_t(idx[d]) << (kBits * d);
+    return k;
+  };
+  std::vector<std::pair<std::uint64_t, CellId>> grid(nc);
+  for (std::size_t c = 0; c < nc; ++c) {
+    std::int64_t idx[Dim];
+    for (int d = 0; d < Dim; ++d) idx[d] = index(centroid[c * Dim + d], d);
+    grid[c] = {key_of(idx), CellId(c)};
+  }
+  std::sort(grid.begin(), grid.end());
+  for (std::size_t c = 0; c < nc; ++c) {
+    gather<Dim>(mesh, mesh.cell(CellId(c)), N, pts);
+    const double vol = signed_volume(pts, Dim);
+    std::int64_t ilo[Dim], ihi[Dim], idx[Dim];
+    double cover = 1;
+    for (int d = 0; d < Dim; ++d) {
+      double a = pts[d], b = pts[d];
+      for (int k = 1; k < N; ++k) a = std::min(a, pts[k * Dim + d]), b = std::max(b, pts[k * Dim + d]);
+      ilo[d] = index(a, d);
+      ihi[d] = index(b, d);
+      cover *= double(ihi[d] - ilo[d] + 1);
+    }
+    if (cover > 4096) continue; // a huge cell among small ones: skipped, not worth the scan
+    std::copy(ilo, ilo + Dim, idx);
+    for (;;) {
+      const std::uint64_t k = key_of(idx);
+      auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(k, CellId(0)));
+      for (; it != grid.end() && it->first == k; ++it) {
+        const CellId o = it->second;
+        if (o == c) continue;
+        const double *x = &centroid[std::size_t(o) * Dim];
+        bool inside = true;
+        for (int i = 0; i < N && inside; ++i) {
+          double q[N * Dim];
+          std::copy(pts, pts + N * Dim, q);
+          std::copy(x, x + Dim, q + i * Dim);
+          inside = signed_volume(q, Dim) / vol > 1e-9;
+        }
+        if (inside)
+          return "cells " + std::to_string(c) + " and " + std::to_string(o) +
+                 " overlap (the centroid of cell " + std::to_string(o) + " lies inside cell " +
+                 std::to_string(c) + ")";
+      }
+      int d = 0;
+      while (d < Dim && ++idx[d] > ihi[d]) idx[d] = ilo[d], ++d;
+      if (d == Dim) break;
+    }
+  }
+  return {};
+}
+
 template <class F> decltype(auto) dispatch(int dim, F &&f) {
   switch (dim) {
   case 2:
@@ -729,6 +826,8 @@ void prepare_input(Mesh &mesh, const std::string &path) {
       throw InputError(path, "tangled: " + fr.overlap);
     if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
       throw InputError(path, "non-conforming input: " + s);
+    if (std::string s = find_overlap<D>(mesh); !s.empty())
+      throw InputError(path, "tangled: " + s);
     // Orient every cell positively (a negatively oriented cell is not an error).
     for (std::size_t c = 0; c < nc; ++c)
       if (signs[c] < 0)

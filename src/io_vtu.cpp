@@ -45,6 +45,8 @@
 #include <limits>
 #include <mutex>
 #include <string>
+#include <algorithm>
+#include <string_view>
 #include <iterator>
 #include <cstdlib>
 #include <cctype>
@@ -212,7 +214,13 @@ vtkSmartPointer<vtkUnstructuredGrid> load_grid(const std::string &path) {
   reader->SetReaderErrorObserver(observer);
   reader->SetParserErrorObserver(observer);
   reader->SetFileName(path.c_str());
-  reader->Update();
+  try {
+    reader->Update();
+  } catch (const std::bad_alloc &) {
+    throw InputError(path, "corrupt data: an array claims more memory than the machine has");
+  } catch (const std::exception &e) {
+    throw InputError(path, std::string("corrupt data (") + e.what() + ")");
+  }
   auto &errors = active.log.errors;
   if (!errors.empty())
     throw InputError(path, errors.front());
@@ -548,10 +556,70 @@ std::string attribute(const std::string &tag, const std::string &name) {
   return end == std::string::npos ? std::string() : tag.substr(at, end - at);
 }
 
+// Decodes base64 text (whitespace skipped) until `want` bytes are out.
+std::string base64_prefix(std::string_view text, std::size_t want) {
+  auto value = [](char c) -> int {
+    if (c >= 'A' && c <= 'Z') return c - 'A';
+    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+    if (c >= '0' && c <= '9') return c - '0' + 52;
+    if (c == '+') return 62;
+    if (c == '/') return 63;
+    return -1;
+  };
+  std::string out;
+  unsigned acc = 0;
+  int bits = 0;
+  for (char c : text) {
+    if (out.size() >= want || c == '=') break;
+    int v = value(c);
+    if (v < 0) continue;
+    acc = (acc << 6) | unsigned(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(char((acc >> bits) & 0xff));
+    }
+  }
+  return out;
+}
+
+// A zlib-compressed inline array starts with a header: block count, block
+// size, last block size, then one compressed size per block. VTK 9.1 trusts
+// it (a zero block size divides by zero; huge sizes allocate); check it
+// against the text that holds the data. Little-endian headers assumed.
+void check_compression_header(const std::string &path, const std::string &name,
+                              std::string_view content, int w) {
+  auto read = [&](const std::string &bytes, std::size_t i) {
+    unsigned long long v = 0;
+    for (int k = w - 1; k >= 0; --k) v = v << 8 | static_cast<unsigned char>(bytes[i * w + k]);
+    return v;
+  };
+  auto bad = [&](const std::string &what) {
+    return InputError(path, "array '" + name + "': corrupt compression header (" + what + ")");
+  };
+  std::string head = base64_prefix(content, std::size_t(3 * w));
+  if (head.size() < std::size_t(3 * w)) throw bad("too short");
+  const unsigned long long blocks = read(head, 0), block = read(head, 1), last = read(head, 2);
+  const unsigned long long room = content.size(); // compressed bytes <= base64 chars
+  if (blocks > room) throw bad(std::to_string(blocks) + " blocks in " + std::to_string(room) + " characters");
+  if (blocks == 0) return;
+  if (block == 0) throw bad("block size 0");
+  if (last > block) throw bad("last block larger than a block");
+  // zlib cannot expand data more than about 1032 times.
+  if (block > 1100 * room || (blocks - 1) > (1100 * room) / block)
+    throw bad("uncompressed size out of proportion to the data");
+  std::string all = base64_prefix(content, std::size_t((3 + blocks) * w));
+  if (all.size() < (3 + blocks) * w) throw bad("block sizes missing");
+  for (unsigned long long b = 0; b < blocks; ++b)
+    if (read(all, 3 + b) > room) throw bad("block " + std::to_string(b) + " larger than the data");
+}
+
 void check_ascii_arrays(const std::string &path) {
   std::ifstream f(path, std::ios::binary);
   std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   long long points = -1, cells = -1;
+  bool compressed = false;
+  int header_bytes = 4;
   enum { None, InPoints, InPointData, InCellData, InCells } section = None;
   std::size_t pos = 0;
   while ((pos = text.find('<', pos)) != std::string::npos) {
@@ -561,6 +629,27 @@ void check_ascii_arrays(const std::string &path) {
     pos = close + 1;
     auto starts = [&](const char *t) { return tag.rfind(t, 0) == 0; };
     if (starts("<AppendedData")) return; // raw binary follows
+    if (starts("<VTKFile")) {
+      compressed = !attribute(tag, "compressor").empty();
+      std::string h = attribute(tag, "header_type");
+      if (!h.empty() && h != "UInt32" && h != "UInt64")
+        throw InputError(path, "header_type \"" + h + "\" is not UInt32 or UInt64");
+      header_bytes = h == "UInt64" ? 8 : 4;
+    }
+    if (starts("<DataArray")) {
+      static const char *kTypes[] = {"Int8",   "UInt8",  "Int16",   "UInt16",  "Int32", "UInt32",
+                                     "Int64",  "UInt64", "Float32", "Float64", "String", "Bit"};
+      std::string type = attribute(tag, "type");
+      if (std::find(std::begin(kTypes), std::end(kTypes), type) == std::end(kTypes))
+        throw InputError(path, "DataArray \"" + attribute(tag, "Name") + "\" has no valid type (\"" +
+                                   type + "\")");
+      if (compressed && attribute(tag, "format") == "binary") {
+        std::size_t end = text.find("</DataArray>", pos);
+        if (end != std::string::npos)
+          check_compression_header(path, attribute(tag, "Name"),
+                                   std::string_view(text).substr(pos, end - pos), header_bytes);
+      }
+    }
     if (starts("<Piece")) {
       points = std::atoll(attribute(tag, "NumberOfPoints").c_str());
       cells = std::atoll(attribute(tag, "NumberOfCells").c_str());

@@ -349,7 +349,7 @@ bad("truncated-zlib.vtu", vtu_zlib(truncate_b64=True), "Cannot read points array
 # Compression headers found by fuzz_vtu to break VTK 9.1 (see the report):
 # block size 0 (division by zero), 2^40 blocks (std::length_error), a
 # 2^40-byte block (huge allocation).
-bad("zlib-block-size-zero.vtu", vtu_zlib(header=(1, 0, 0, 80)), "points array")
+bad("zlib-block-size-zero.vtu", vtu_zlib(header=(1, 0, 0, 80)), "compression header")
 bad("zlib-many-blocks.vtu", vtu_zlib(header=(1 << 40, 96, 96, 80)), "compress")
 bad("zlib-huge-block.vtu", vtu_zlib(header=(1, 1 << 40, 1 << 40, 80)), "compress")
 # Kept as found by fuzz_vtu (not generated): a division by zero (SIGFPE) in
