@@ -10,6 +10,7 @@
 // hashes boundary vertices into a uniform grid and tests every boundary facet
 // against the vertices in its bounding box.
 #include "check.hpp"
+#include "dimension.hpp"
 
 #include "measure.hpp"
 
@@ -710,19 +711,6 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
   return {};
 }
 
-template <class F> decltype(auto) dispatch(int dim, F &&f) {
-  switch (dim) {
-  case 2:
-    return f.template operator()<2>();
-  case 3:
-    return f.template operator()<3>();
-  case 4:
-    return f.template operator()<4>();
-  default:
-    throw std::invalid_argument("unsupported dimension " + std::to_string(dim) +
-                                " (expected 2, 3 or 4)");
-  }
-}
 
 bool relative_change(double before, double after) {
   const double scale = std::max(std::abs(before), std::abs(after));

@@ -4,6 +4,7 @@
 // Comput. 23 (2001) 193-218. Kernels are templates on the dimension; the
 // public functions dispatch once on `dim` (STYLE.md §3).
 #include "measure.hpp"
+#include "dimension.hpp"
 
 #include <algorithm>
 #include <array>
@@ -209,24 +210,7 @@ template <int Dim> std::size_t count_similarity_classes_t(const Mesh &mesh) {
   return std::size_t(std::unique(keys.begin(), keys.end()) - keys.begin());
 }
 
-[[noreturn]] void bad_dimension(int dim) {
-  throw std::invalid_argument("unsupported dimension " + std::to_string(dim) +
-                              " (expected 2, 3 or 4)");
-}
 
-// Calls f.template operator()<Dim>() for the run-time dimension.
-template <class F> decltype(auto) dispatch(int dim, F &&f) {
-  switch (dim) {
-  case 2:
-    return f.template operator()<2>();
-  case 3:
-    return f.template operator()<3>();
-  case 4:
-    return f.template operator()<4>();
-  default:
-    bad_dimension(dim);
-  }
-}
 
 } // namespace
 

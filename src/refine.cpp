@@ -8,6 +8,7 @@
 // iteration is conforming no cell has an edge that was bisected.
 #include "refine.hpp"
 
+#include "dimension.hpp"
 #include "mark.hpp"
 #include "numbering.hpp"
 
@@ -322,12 +323,7 @@ RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected, const Refin
   if (!mesh.marked()) throw CheckError("refine: the mesh is not marked");
   RefineLimits l = limits;
   l.max_cells = std::min<std::size_t>(l.max_cells, kNoCell - 1);
-  switch (mesh.dim) {
-  case 2: return refine_dim<2>(mesh, selected, l);
-  case 3: return refine_dim<3>(mesh, selected, l);
-  case 4: return refine_dim<4>(mesh, selected, l);
-  }
-  throw CheckError("refine: unsupported dimension " + std::to_string(mesh.dim));
+  return dispatch(mesh.dim, [&]<int D>() { return refine_dim<D>(mesh, selected, l); });
 }
 
 RefineResult refine_uniform(Mesh &mesh) {
