@@ -57,4 +57,33 @@ inline void refine_and_check(bisect::Mesh &mesh, const bisect::Region &region, i
   }
 }
 
+// Any bytes as a mesh file read by `read` (read_msh or read_vtu): reading and
+// prepare_input may only throw InputError; an accepted mesh must refine
+// conformally around the closed ball at its first vertex.
+inline int fuzz_mesh_file(const std::uint8_t *data, std::size_t size, const char *ext,
+                          bisect::Mesh (*read)(const std::string &), int max_dim) {
+  using namespace bisect;
+  const std::string path = write_temp(data, size, ext);
+  Mesh mesh;
+  try {
+    mesh = read(path);
+    prepare_input(mesh, path);
+    if (!decode_state(mesh, path))
+      mark_mesh(mesh, Marking(size % 3));
+  } catch (const InputError &) {
+    std::remove(path.c_str());
+    return 0;
+  }
+  std::remove(path.c_str());
+  if (mesh.dim < 2 || mesh.dim > max_dim)
+    fail(std::string("the reader returned a ") + std::to_string(mesh.dim) + "D mesh");
+  std::string c = "[";
+  for (int d = 0; d < mesh.dim; ++d)
+    c += (d ? "," : "") + std::to_string(mesh.coords[d]);
+  const auto region = parse_region(
+      "{\"type\":\"sphere\",\"solid\":true,\"radius\":0.5,\"center\":" + c + "]}", mesh.dim, "fuzz");
+  refine_and_check(mesh, *region, 2);
+  return 0;
+}
+
 } // namespace bisect_fuzz
