@@ -32,7 +32,7 @@ constexpr int kExitOk = 0, kExitInput = 1, kExitCheck = 2, kExitLimit = 3, kExit
 
 const char *kExitCodesHelp = "Exit codes: 0 success; 1 usage or input error (one line on stderr names "
                              "the file and the problem); 2 an internal check failed; 3 a limit "
-                             "(--max-elements, 32-bit ids) was reached, the output is still written "
+                             "(--max-elements, --max-memory, 32-bit ids) was reached, the output is still written "
                              "and conforming; 130 interrupted (no output written).";
 
 std::atomic<bool> g_interrupted{false};
