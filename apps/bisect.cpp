@@ -2,6 +2,7 @@
 // Exit codes: 0 success, 1 usage or input error, 2 internal check failed,
 // 3 limit reached (the output is still a valid conforming mesh).
 #include "check.hpp"
+#include "extrude.hpp"
 #include "generate.hpp"
 #include "io.hpp"
 #include "mark.hpp"
@@ -15,6 +16,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -317,6 +319,40 @@ int run_refine(const RefineArgs &a) {
   return limit_reached ? kExitLimit : kExitOk;
 }
 
+// "0,0.5,1" or "start:stop:count" (count slabs, count + 1 slices).
+std::vector<double> parse_slices(const std::string &text) {
+  auto number = [&](const std::string &t) {
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(t, &used);
+    } catch (const std::exception &) {
+      used = 0;
+    }
+    if (used != t.size() || t.empty() || !std::isfinite(v))
+      throw UsageError("--slices: \"" + t + "\" is not a number (expected T0,T1,... or START:STOP:COUNT)");
+    return v;
+  };
+  std::vector<double> out;
+  if (text.find(':') != std::string::npos) {
+    std::vector<std::string> parts;
+    std::stringstream in(text);
+    for (std::string p; std::getline(in, p, ':');) parts.push_back(p);
+    if (parts.size() != 3) throw UsageError("--slices: expected START:STOP:COUNT, got \"" + text + "\"");
+    double a = number(parts[0]), b = number(parts[1]), n = number(parts[2]);
+    if (!(n >= 1 && n <= 10000 && n == std::floor(n)))
+      throw UsageError("--slices: COUNT must be a whole number from 1 to 10000");
+    for (int i = 0; i <= int(n); ++i) out.push_back(a + (b - a) * i / n);
+  } else {
+    std::stringstream in(text);
+    for (std::string p; std::getline(in, p, ',');) out.push_back(number(p));
+  }
+  if (out.size() < 2) throw UsageError("--slices: need at least two slices");
+  for (std::size_t i = 1; i < out.size(); ++i)
+    if (!(out[i] > out[i - 1])) throw UsageError("--slices: values must increase");
+  return out;
+}
+
 // ------------------------------------------------------------------ info ---
 
 void print_bbox(const Mesh &mesh) {
@@ -498,6 +534,23 @@ int main(int argc, char **argv) {
   slice_cmd->add_option("--output,-o", slice_out, "Output 3D mesh (.vtu or .msh)")->required();
   slice_cmd->add_flag("--force,-f", slice_force, "Overwrite an existing file");
 
+  std::string ex_in, ex_out, ex_slices, ex_method = "delaunay";
+  bool ex_force = false;
+  auto *extrude_cmd = app.add_subcommand(
+      "extrude", "Extrude a 3D tetrahedral mesh over time slices into a 4D pentatope mesh.");
+  extrude_cmd->footer("Example: bisect extrude cube.vtu --slices 0,0.5,1 -o spacetime.vtu\n"
+                      "         bisect extrude cube.vtu --slices 0:1:4 -o spacetime.vtu   "
+                      "(4 slabs between 0 and 1)\n"
+                      "--method delaunay triangulates the 4D points with Qhull: the 3D mesh must be "
+                      "convex (a non-convex one is rejected).");
+  extrude_cmd->add_option("input", ex_in, "3D mesh (.vtu or .msh)")->required();
+  extrude_cmd->add_option("--slices", ex_slices, "T0,T1,... or START:STOP:COUNT (COUNT slabs)")
+      ->required();
+  extrude_cmd->add_option("--method", ex_method, "delaunay (the only one so far)")
+      ->check(CLI::IsMember({"delaunay"}));
+  extrude_cmd->add_option("--output,-o", ex_out, "Output 4D mesh (.vtu)")->required();
+  extrude_cmd->add_flag("--force,-f", ex_force, "Overwrite an existing file");
+
   std::string info_in;
   auto *info_cmd = app.add_subcommand("info", "Dimension, counts, bounding box, volume, quality.");
   info_cmd->footer("Example: bisect info data/ball.msh");
@@ -562,6 +615,22 @@ int main(int argc, char **argv) {
   try {
     if (*refine_cmd) return run_refine(ra);
     if (*info_cmd) return run_info(info_in);
+    if (*extrude_cmd) {
+      refuse_overwrite(ex_out, ex_in, ex_force);
+      std::vector<double> ts = parse_slices(ex_slices);
+      Mesh mesh = read_mesh(ex_in);
+      prepare_input(mesh, ex_in);
+      if (mesh.dim != 3)
+        throw InputError(ex_in, "extrude needs a 3D tetrahedral mesh, this one is " +
+                                    std::to_string(mesh.dim) + "D");
+      Mesh m4;
+      try {
+        m4 = extrude_delaunay(mesh, ts);
+      } catch (const InputError &e) {
+        throw InputError(ex_in, e.what());
+      }
+      return write_generated(std::move(m4), ex_out, true);
+    }
     if (*slice_cmd) {
       refuse_overwrite(slice_out, slice_in, slice_force);
       Mesh mesh = read_mesh(slice_in);
