@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string_view>
 
 namespace bisect {
 
@@ -33,12 +35,19 @@ bool EdgeOrder::before(VertexId a, VertexId b, VertexId c, VertexId d) const {
   if (marking == Marking::Longest) {
     double lab = squared_length(*this, a, b), lcd = squared_length(*this, c, d);
     if (lab != lcd) return lab > lcd;
+  } else if (marking == Marking::Explicit) {
+    auto find = [&](VertexId p, VertexId q) {
+      auto it = rank->find(edge_key(p, q));
+      return it == rank->end() ? std::uint64_t(1) << 32 : std::uint64_t(it->second);
+    };
+    std::uint64_t rab = find(a, b), rcd = find(c, d);
+    if (rab != rcd) return rab < rcd;
   }
   return a != c ? a < c : b < d;
 }
 
 EdgeOrder edge_order(const Mesh &mesh) {
-  return EdgeOrder{mesh.marking, &mesh.coords, mesh.dim};
+  return EdgeOrder{mesh.marking, &mesh.coords, mesh.dim, &mesh.edge_rank};
 }
 
 EdgePick consistent_edge(const EdgeOrder &order, const VertexId *ids, int count) {
@@ -98,6 +107,89 @@ TetType classify_tet(const EdgeOrder &order, const VertexId *ids) {
   if (t1 && t2) return other(m.m1, m.b) == other(m.m2, m.a) ? TetType::Planar : TetType::Adjacent;
   if (t1 || t2) return TetType::Mixed;
   return TetType::Opposite;
+}
+
+namespace {
+
+char type_letter(TetType t) {
+  switch (t) {
+  case TetType::Planar: return 'P';
+  case TetType::Adjacent: return 'A';
+  case TetType::Opposite: return 'O';
+  case TetType::Mixed: return 'M';
+  }
+  return '?';
+}
+
+int letter_rank(char c) { return int(std::string_view("PAOM").find(c)); }
+
+} // namespace
+
+std::string simplex_type(const EdgeOrder &order, const VertexId *ids, int dim) {
+  if (dim == 3) return std::string(1, type_letter(classify_tet(order, ids)));
+  if (dim != 4) return "";
+  // Level 0 (a, b); level 1: the consistent edges of the tets opposite a and b.
+  EdgePick e = consistent_edge(order, ids, 5);
+  VertexId a = ids[e.first], b = ids[e.second];
+  VertexId ta[4], tb[4];
+  for (int i = 0, ka = 0, kb = 0; i < 5; ++i) {
+    if (ids[i] != a) ta[ka++] = ids[i];
+    if (ids[i] != b) tb[kb++] = ids[i];
+  }
+  EdgePick pa = consistent_edge(order, ta, 4), pb = consistent_edge(order, tb, 4);
+  VertexId ma[2] = {ta[pa.first], ta[pa.second]}, mb[2] = {tb[pb.first], tb[pb.second]};
+  bool t1 = contains(ma, b), t2 = contains(mb, a);
+  TetType alpha = t1 && t2 ? (other(ma, b) == other(mb, a) ? TetType::Planar : TetType::Adjacent)
+                  : t1 || t2 ? TetType::Mixed
+                             : TetType::Opposite;
+  // Level 2 relative to level 1 is the tet classification of each face.
+  char beta = type_letter(classify_tet(order, ta)), gamma = type_letter(classify_tet(order, tb));
+  if (letter_rank(gamma) < letter_rank(beta)) std::swap(beta, gamma);
+  return std::string{type_letter(alpha), '_', beta, gamma};
+}
+
+void force_type(Mesh &mesh, const std::string &type) {
+  const int n = mesh.dim, nv = n + 1;
+  if (mesh.num_cells() != 1 || (n != 3 && n != 4))
+    throw std::invalid_argument("forced types exist for one tetrahedron or one pentatope only");
+  const VertexId *x = mesh.cell(0);
+  std::vector<std::uint64_t> edges;
+  for (int i = 0; i < nv; ++i)
+    for (int j = i + 1; j < nv; ++j) edges.push_back(edge_key(x[i], x[j]));
+  // Every ranking of the edges is a global edge order; try them in a fixed
+  // pseudo-random sequence (deterministic output) and keep the first whose
+  // marks have the type asked for.
+  std::vector<std::uint32_t> perm(edges.size());
+  for (std::size_t i = 0; i < perm.size(); ++i) perm[i] = std::uint32_t(i);
+  std::unordered_map<std::uint64_t, std::uint32_t> rank;
+  EdgeOrder order{Marking::Explicit, &mesh.coords, n, &rank};
+  std::uint64_t state = 0x9e3779b97f4a7c15ull;
+  std::vector<std::string> seen;
+  for (int attempt = 0; attempt < 200000; ++attempt) {
+    for (std::size_t i = perm.size() - 1; i > 0; --i) { // Fisher-Yates, splitmix64
+      state += 0x9e3779b97f4a7c15ull;
+      std::uint64_t z = state;
+      z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+      z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+      z ^= z >> 31;
+      std::swap(perm[i], perm[z % (i + 1)]);
+    }
+    rank.clear();
+    for (std::size_t i = 0; i < edges.size(); ++i) rank[edges[i]] = perm[i];
+    std::string t = simplex_type(order, x, n);
+    if (t == type) {
+      mesh.edge_rank = rank;
+      mark_mesh(mesh, Marking::Explicit);
+      return;
+    }
+    if (std::find(seen.begin(), seen.end(), t) == seen.end()) seen.push_back(t);
+  }
+  std::sort(seen.begin(), seen.end());
+  std::string list;
+  for (const std::string &t : seen) list += (list.empty() ? "" : ", ") + t;
+  throw std::invalid_argument("type " + type + " does not arise from any edge order of a " +
+                              (n == 3 ? std::string("tetrahedron") : std::string("pentatope")) +
+                              "; the types that do: " + list);
 }
 
 void mark_mesh(Mesh &mesh, Marking marking) {
@@ -175,6 +267,19 @@ void encode_state(Mesh &mesh) {
     set_array(mesh.cell_data, std::move(stage));
     set_array(mesh.cell_data, std::move(tag));
     set_array(mesh.cell_data, std::move(marking));
+    if (mesh.marking == Marking::Explicit) {
+      const int ne = nv * n / 2;
+      DataArray rank{kEdgeRankArray, ne, std::vector<double>(nc * ne, -1.0)};
+      for (std::size_t c = 0; c < nc; ++c) {
+        const VertexId *x = mesh.cell(CellId(c));
+        for (int i = 0, k = 0; i < nv; ++i)
+          for (int j = i + 1; j < nv; ++j, ++k) {
+            auto it = mesh.edge_rank.find(edge_key(x[i], x[j]));
+            if (it != mesh.edge_rank.end()) rank.values[c * ne + k] = it->second;
+          }
+      }
+      set_array(mesh.cell_data, std::move(rank));
+    }
   }
 }
 
@@ -195,9 +300,34 @@ bool decode_state(Mesh &mesh, const std::string &path) {
       marking.components != 1)
     throw InputError(path, "bisection state arrays have the wrong number of components");
   double m0 = nc ? marking.values[0] : 0;
-  if (!(m0 == 0 || m0 == 1 || m0 == 2))
-    throw InputError(path, std::string(kMarkingArray) + " must be 0, 1 or 2");
+  if (!(m0 == 0 || m0 == 1 || m0 == 2 || m0 == 3))
+    throw InputError(path, std::string(kMarkingArray) + " must be 0, 1, 2 or 3");
   mesh.marking = Marking(int(m0));
+  int ir = find_array(mesh.cell_data, kEdgeRankArray);
+  mesh.edge_rank.clear();
+  if (mesh.marking == Marking::Explicit) {
+    const int ne = nv * n / 2;
+    if (ir < 0 || mesh.cell_data[ir].components != ne)
+      throw InputError(path, std::string("explicit marking needs the cell array ") + kEdgeRankArray +
+                                 " with " + std::to_string(ne) + " components");
+    const DataArray &rank = mesh.cell_data[ir];
+    for (std::size_t c = 0; c < nc; ++c) {
+      const VertexId *x = mesh.cell(CellId(c)); // stored connectivity, as encoded
+      for (int i = 0, k = 0; i < nv; ++i)
+        for (int j = i + 1; j < nv; ++j, ++k) {
+          double r = rank.values[c * ne + k];
+          if (r == -1) continue;
+          if (!(r >= 0 && r < 4294967295.0 && r == std::floor(r)))
+            throw InputError(path, "cell " + std::to_string(c) + ": " + kEdgeRankArray +
+                                       " holds " + std::to_string(r) + ", not a rank");
+          auto [it, fresh] = mesh.edge_rank.emplace(edge_key(x[i], x[j]), std::uint32_t(r));
+          if (!fresh && it->second != std::uint32_t(r))
+            throw InputError(path, "cell " + std::to_string(c) + ": " + kEdgeRankArray +
+                                       " gives edge " + std::to_string(x[i]) + "-" +
+                                       std::to_string(x[j]) + " two different ranks");
+        }
+    }
+  }
   mesh.stage.resize(nc);
   mesh.tag.resize(nc);
   for (std::size_t c = 0; c < nc; ++c) {
@@ -228,7 +358,8 @@ bool decode_state(Mesh &mesh, const std::string &path) {
       x[i] = conn[int(p)];
     }
   }
-  for (int i : {io, is, it, im}) mesh.cell_data[i].name.clear();
+  for (int i : {io, is, it, im, ir})
+    if (i >= 0) mesh.cell_data[i].name.clear();
   std::erase_if(mesh.cell_data, [](const DataArray &a) { return a.name.empty(); });
   return true;
 }
@@ -237,6 +368,7 @@ std::optional<Marking> parse_marking(const std::string &name) {
   if (name == "index") return Marking::Index;
   if (name == "longest") return Marking::Longest;
   if (name == "sorted") return Marking::Sorted;
+  if (name == "explicit") return Marking::Explicit;
   return std::nullopt;
 }
 
@@ -245,6 +377,7 @@ const char *marking_name(Marking marking) {
   case Marking::Index: return "index";
   case Marking::Longest: return "longest";
   case Marking::Sorted: return "sorted";
+  case Marking::Explicit: return "explicit";
   }
   return "?";
 }

@@ -4,8 +4,10 @@
 
 #include "mesh.hpp"
 
+#include <cstdint>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace bisect {
@@ -14,10 +16,12 @@ namespace bisect {
 // longer first (squared length computed from the endpoints in sorted-id order
 // so every cell computes the identical double), ties by the index key.
 // `sorted` uses the index order for the (unused) consistent edges.
+// `explicit`: ranked edges first, by rank; the rest by the index key.
 struct EdgeOrder {
   Marking marking = Marking::Index;
   const std::vector<double> *coords = nullptr; // the mesh's, which may grow
   int dim = 0;
+  const std::unordered_map<std::uint64_t, std::uint32_t> *rank = nullptr; // explicit only
 
   // True when edge {a, b} comes before edge {c, d}.
   bool before(VertexId a, VertexId b, VertexId c, VertexId d) const;
@@ -45,11 +49,29 @@ void mark_mesh(Mesh &mesh, Marking marking);
 enum class TetType { Planar, Adjacent, Mixed, Opposite };
 TetType classify_tet(const EdgeOrder &order, const VertexId *ids);
 
+// The type of a 3D tet ("P", "A", "O", "M") or of a pentatope ("A_PO": how the
+// level-1 marks relate to the level-0 mark, then each level-2 pair to its
+// level-1 mark; seed 000 §3.2), under the order. The two lower letters are
+// listed in the order P, A, O, M, since swapping the ends of the refinement
+// edge swaps them.
+std::string simplex_type(const EdgeOrder &order, const VertexId *ids, int dim);
+
+// Forces the marks of a mesh's cells to a chosen type: finds a ranking of the
+// edges of cell 0 (the only cell of a generated simplex) whose marks have
+// `type`, stores it as the explicit edge order and marks the mesh. Throws
+// std::invalid_argument naming the types that exist when `type` cannot arise
+// from any global edge order (or the mesh is not a single 3D/4D simplex).
+void force_type(Mesh &mesh, const std::string &type);
+
 // Names of the cell arrays that carry the state in files.
 inline constexpr const char *kOrderArray = "bisect:order";     // dim+1 comps
 inline constexpr const char *kStageArray = "bisect:stage";     // 0 Opposite, 1 Maubach
 inline constexpr const char *kTagArray = "bisect:tag";         // see mesh.hpp
-inline constexpr const char *kMarkingArray = "bisect:marking"; // 0 index, 1 longest, 2 sorted
+inline constexpr const char *kMarkingArray = "bisect:marking"; // 0 index, 1 longest, 2 sorted, 3 explicit
+// Explicit marking only: per cell, the rank of each of its dim(dim+1)/2 edges
+// (i, j), i < j, of the stored connectivity, in the order (0,1), (0,2), ...,
+// (n-1,n); -1 for an edge without rank.
+inline constexpr const char *kEdgeRankArray = "bisect:edge_rank";
 
 // Before writing: orients every cell positively in `cells` and stores the
 // tuple as the `bisect:*` cell arrays (tuple[i] = cell[order[i]]).

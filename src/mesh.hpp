@@ -9,6 +9,8 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace bisect {
@@ -27,7 +29,16 @@ inline constexpr CellId kNoCell = std::numeric_limits<CellId>::max();
 enum class Stage : std::uint8_t { Opposite = 0, Maubach = 1 };
 
 // The global edge order all marks come from (ALGORITHMS.md §2, §4).
-enum class Marking : std::uint8_t { Index, Longest, Sorted };
+// Explicit: the order is the mesh's `edge_rank` table (forced marks, e.g. for
+// one pentatope of a chosen type); unranked edges come after every ranked
+// one, among themselves by index.
+enum class Marking : std::uint8_t { Index, Longest, Sorted, Explicit };
+
+// Key of the edge {a, b} in `Mesh::edge_rank`.
+inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return std::uint64_t(a) << 32 | b;
+}
 
 // A named array attached to points or cells; `components` values per entity.
 struct DataArray {
@@ -43,6 +54,7 @@ struct Mesh {
   std::vector<Stage> stage;      // per cell; empty until the mesh is marked
   std::vector<std::uint8_t> tag; // per cell; meaning depends on stage
   Marking marking = Marking::Index;
+  std::unordered_map<std::uint64_t, std::uint32_t> edge_rank; // Marking::Explicit only
   std::vector<DataArray> point_data;
   std::vector<DataArray> cell_data;
 
