@@ -18,4 +18,13 @@ one_line_naming "not a number"
 expect_exit 1 "$BISECT" extrude "$ROOT/data/square.msh" --slices 0,1 -o bad.vtu
 one_line_naming "square.msh"
 [[ ! -e bad.vtu ]] || fail "output left behind"
+# The faceted octant is not convex: refused, unless --hull.
+expect_exit 1 "$BISECT" extrude "$ROOT/data/octant.msh" --slices 0,1 -o oct.vtu
+one_line_naming "--hull"
+[[ ! -e oct.vtu ]] || fail "output left behind"
+expect_exit 0 "$BISECT" extrude "$ROOT/data/octant.msh" --slices 0,1 --hull -o oct.vtu
+expect_exit 0 "$BISECT" check oct.vtu
+expect_exit 0 "$BISECT" refine oct.vtu --region "$ROOT/data/regions/hypersphere.json" -n 5 -o oct5.vtu --quiet --slices 0,0.5,1
+expect_exit 0 "$BISECT" check oct5.vtu --against oct.vtu
+for t in 0 0.5 1; do expect_exit 0 "$BISECT" check oct5.t$t.vtu; done
 echo "extrude_4d: ok"
