@@ -17,7 +17,7 @@ compare_markings() {
   shift 5
   local first=1 dim slices=()
   dim=$("$bisect" info "$input" | awk '/^dimension:/ {print $2}')
-  printf '%-10s %12s %10s %8s %8s %14s %8s %8s\n' marking cells vertices "min q" "max q" \
+  printf '%-10s %12s %10s %8s %8s %12s %16s %8s\n' marking cells vertices "min q" "max q" \
     "closure/sel" "classes" "seconds"
   for marking in "$@"; do
     slices=()
@@ -31,7 +31,7 @@ compare_markings() {
       -o "$out/$marking-classes.vtu" --quality-csv "$out/$marking-classes.csv" --quiet --force
     classes=$("$bisect" quality "$out/$marking-classes.vtu" --classes | awk -F': *' '/^classes:/ {print $2}')
     rm -f "$out/$marking-classes.vtu" "$out/$marking-classes.csv"
-    printf '%-10s %12s %10s %8.4f %8.4f %14s %8s %8s\n' "$marking" "$(json_num cells <<<"$summary")" \
+    printf '%-10s %12s %10s %8.4f %8.4f %12s %16s %8s\n' "$marking" "$(json_num cells <<<"$summary")" \
       "$(json_num vertices <<<"$summary")" "$(json_num min_quality <<<"$summary")" \
       "$(json_num max_quality <<<"$summary")" "$(closure_cost "$out/$marking.csv")" \
       "$classes (it $class_iterations)" "$secs"
