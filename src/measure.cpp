@@ -177,9 +177,14 @@ template <int Dim> void similarity_key_t(const double *verts, std::int32_t *key)
       len[e] = squared_distance<Dim>(verts + i * Dim, verts + j * Dim);
       sum += len[e];
     }
+  // Ratios of bisected simplices are rationals with power-of-two
+  // denominators; on a decimal grid they can sit exactly halfway between two
+  // steps, where rounding noise splits one class in two. An irrational grid
+  // step (1e-6 / sqrt 2) keeps every such ratio away from the halfway points.
+  constexpr double kScale = 1e6 * 1.4142135623730951;
   std::int32_t rounded[E];
   for (int e = 0; e < E; ++e)
-    rounded[e] = sum > 0 ? std::int32_t(std::llround(len[e] / sum * 1e6)) : 0;
+    rounded[e] = sum > 0 ? std::int32_t(std::llround(len[e] / sum * kScale)) : 0;
   const auto &perms = permutation_table<Dim>().slots;
   const std::array<std::uint8_t, E> *best = &perms[0];
   for (const auto &p : perms) {
