@@ -42,3 +42,5 @@ make() {
 
 make ball 3
 make square 2
+make cylinder 3
+make octant 3

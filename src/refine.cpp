@@ -355,6 +355,7 @@ std::vector<CellId> select_cells(const Mesh &mesh, const Region &region) {
       std::copy(mesh.point(x[i]), mesh.point(x[i]) + dim, pts + i * dim);
     if (region.touches(pts, dim)) out.push_back(CellId(c));
   }
+  region.filter(mesh, out); // e.g. the levelset indicator keeps a fraction
   return out;
 }
 

@@ -11,7 +11,7 @@
 
 namespace bisect {
 
-// The cells whose closed simplex touches the region.
+// The cells whose closed simplex touches the region, then region.filter().
 std::vector<CellId> select_cells(const Mesh &mesh, const Region &region);
 
 struct RefineLimits {

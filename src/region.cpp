@@ -20,6 +20,8 @@
 //                  so over T its max is at a vertex and its min is the distance
 //                  from c0 to the hull of the mapped vertices y = x - v t.
 //   union          exact if its members are.
+//   levelset       sampled (levelset.cpp): never a false "yes", but can miss
+//                  a zero set that passes between the samples.
 //   intersection   conservative: every member touches T (the members may
 //                  touch T in different places, so T can be selected although
 //                  it misses their common part).
@@ -29,6 +31,7 @@
 // fixed-size stack arrays only.
 #include "region.hpp"
 
+#include "levelset.hpp"
 #include "mesh.hpp"
 
 #include <nlohmann/json.hpp>
@@ -542,7 +545,7 @@ private:
 // in the spec ("regions[1].regions[0]: box: ...") and the field.
 
 constexpr const char *kTypes =
-    "sphere, hemisphere, box, halfspace, moving_sphere, union, intersection";
+    "sphere, hemisphere, box, halfspace, moving_sphere, levelset, union, intersection";
 constexpr int kMaxNesting = 64;
 
 struct Parser {
@@ -698,6 +701,8 @@ struct Parser {
         return std::make_unique<MovingSphereRegion<3>>(c, v, r, solid);
       return std::make_unique<MovingSphereRegion<4>>(c, v, r, solid);
     }
+    if (type == "levelset") // levelset.cpp: a formula's zero set, sampled
+      return make_levelset_region(obj, dim, origin, where, path.empty());
     if (type == "union" || type == "intersection") {
       check_fields(obj, where, {"regions"});
       const json &list = field(obj, where, "regions");

@@ -5,8 +5,11 @@
 // region type documents which in region.cpp.
 #pragma once
 
+#include "mesh.hpp"
+
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace bisect {
 
@@ -18,6 +21,11 @@ public:
   // Every point the region contains lies in [lo, hi] (per coordinate);
   // unbounded coordinates give +-infinity. Used to skip far cells quickly.
   virtual void bounds(double *lo, double *hi, int dim) const = 0;
+  // A second look at the cells touches() chose in one iteration (`selected`:
+  // increasing ids into `mesh`); select_cells() calls it last. A region may
+  // drop cells here, e.g. the levelset indicator keeps the fraction where the
+  // function curves most. The default keeps them all.
+  virtual void filter(const Mesh &, std::vector<CellId> &) const {}
 };
 
 // Parses a region spec for a mesh of dimension `dim`. `origin` names where the

@@ -624,7 +624,7 @@ static std::string error_of(const std::string &text, int dim) {
 TEST_CASE("spec errors name the file and the field", "[region][io]") {
   CHECK(error_of(R"({"type":"cube"})", 3) == "test.json: unknown region type \"cube\" (expected "
                                              "sphere, hemisphere, box, halfspace, moving_sphere, "
-                                             "union, intersection)");
+                                             "levelset, union, intersection)");
   CHECK(error_of(R"({"type":"sphere","center":[0,0],"radius":1})", 3) ==
         "test.json: sphere: \"center\" has 2 entries, the mesh is 3D");
   CHECK(error_of(R"({"type":"sphere","center":[0,0],"radius":-1})", 2) ==
