@@ -1,4 +1,7 @@
-// Sections of 4D meshes by axis-aligned hyperplanes.
+// Sections of 4D meshes by axis-aligned hyperplanes, and of 3D meshes by
+// axis-aligned planes (2D+t meshes at a time t). Written for a pentatope; a
+// tet is the same with four vertices (the sections are then triangles and
+// quadrilaterals, and the pulling triangulation splits the quadrilaterals).
 //
 // Every pentatope is classified by the side of each vertex: -1 (x < value),
 // 0 (on the hyperplane), +1. When both sides are present the hyperplane meets
@@ -51,15 +54,17 @@ Key point_key(VertexId a, VertexId b) {
 VertexId key_first(Key k) { return VertexId(k >> 32); }
 VertexId key_second(Key k) { return VertexId(k & 0xffffffffu); }
 
-// One pentatope: its global ids and the side of each vertex.
+// One cell (pentatope or tet): its global ids and the side of each vertex.
 struct Pentatope {
+  int n = 5; // vertices
   std::array<VertexId, 5> ids{};
   std::array<int, 5> side{};
+  unsigned all() const { return (1u << n) - 1; }
 };
 
 bool crosses(const Pentatope &p, unsigned mask) {
   bool neg = false, pos = false;
-  for (int i = 0; i < 5; ++i)
+  for (int i = 0; i < p.n; ++i)
     if (mask >> i & 1u) neg |= p.side[i] < 0, pos |= p.side[i] > 0;
   return neg && pos;
 }
@@ -69,10 +74,10 @@ bool crosses(const Pentatope &p, unsigned mask) {
 // point per edge joining the two sides.
 std::vector<Key> section_points(const Pentatope &p, unsigned mask) {
   std::vector<Key> out;
-  for (int i = 0; i < 5; ++i) {
+  for (int i = 0; i < p.n; ++i) {
     if (!(mask >> i & 1u)) continue;
     if (p.side[i] == 0) out.push_back(point_key(p.ids[i], p.ids[i]));
-    for (int j = i + 1; j < 5; ++j)
+    for (int j = i + 1; j < p.n; ++j)
       if ((mask >> j & 1u) && p.side[i] * p.side[j] < 0) out.push_back(point_key(p.ids[i], p.ids[j]));
   }
   return out;
@@ -83,7 +88,7 @@ std::vector<Key> section_points(const Pentatope &p, unsigned mask) {
 int section_dim(const Pentatope &p, unsigned mask) {
   if (crosses(p, mask)) return std::popcount(mask) - 2;
   int zeros = 0;
-  for (int i = 0; i < 5; ++i)
+  for (int i = 0; i < p.n; ++i)
     zeros += (mask >> i & 1u) && p.side[i] == 0;
   return zeros - 1;
 }
@@ -95,7 +100,7 @@ std::vector<std::vector<Key>> pulling(const Pentatope &p, unsigned mask, int k) 
   if (int(pts.size()) == k + 1) return {pts};
   const Key apex = *std::min_element(pts.begin(), pts.end());
   std::vector<std::vector<Key>> out, seen_facets;
-  for (int u = 0; u < 5; ++u) {
+  for (int u = 0; u < p.n; ++u) {
     if (!(mask >> u & 1u)) continue;
     const unsigned sub = mask & ~(1u << u);
     if (section_dim(p, sub) != k - 1) continue; // not a facet of the section
@@ -115,7 +120,8 @@ std::vector<std::vector<Key>> pulling(const Pentatope &p, unsigned mask, int k) 
 
 Pentatope classify(const Mesh &mesh, CellId c, int axis, double value) {
   Pentatope p;
-  for (int i = 0; i < 5; ++i) {
+  p.n = mesh.dim + 1;
+  for (int i = 0; i < p.n; ++i) {
     p.ids[i] = mesh.cell(c)[i];
     const double x = mesh.point(p.ids[i])[axis];
     p.side[i] = x > value ? 1 : x < value ? -1 : 0;
@@ -124,22 +130,23 @@ Pentatope classify(const Mesh &mesh, CellId c, int axis, double value) {
 }
 
 int count_side(const Pentatope &p, int s) {
-  return int(std::count(p.side.begin(), p.side.end(), s));
+  return int(std::count(p.side.begin(), p.side.begin() + p.n, s));
 }
 
-// For every tetrahedral facet lying in the plane, the pentatope that produces
-// it: one on the side x >= value when there is one.
+// For every facet lying in the plane, the cell that produces it: one on the
+// side x >= value when there is one. (Facets of a tet mesh have 3 vertices;
+// the unused fourth slot stays kNoVertex.)
 std::map<std::array<VertexId, 4>, CellId> in_plane_owners(const Mesh &mesh, int axis, double value) {
   std::map<std::array<VertexId, 4>, CellId> owner;
   std::map<std::array<VertexId, 4>, bool> owner_above;
   for (std::size_t c = 0; c < mesh.num_cells(); ++c) {
     const Pentatope p = classify(mesh, CellId(c), axis, value);
-    if (count_side(p, 0) != 4) continue;
-    std::array<VertexId, 4> facet{};
+    if (count_side(p, 0) != p.n - 1) continue;
+    std::array<VertexId, 4> facet{kNoVertex, kNoVertex, kNoVertex, kNoVertex};
     int n = 0;
-    for (int i = 0; i < 5; ++i)
+    for (int i = 0; i < p.n; ++i)
       if (p.side[i] == 0) facet[n++] = p.ids[i];
-    std::sort(facet.begin(), facet.end());
+    std::sort(facet.begin(), facet.begin() + n);
     const bool above = count_side(p, 1) == 1;
     auto it = owner.find(facet);
     if (it == owner.end() || (above && !owner_above[facet])) {
@@ -150,23 +157,31 @@ std::map<std::array<VertexId, 4>, CellId> in_plane_owners(const Mesh &mesh, int 
   return owner;
 }
 
-// The tets of pentatope c, as cut-point keys.
+// The section simplices of cell c (tets of a pentatope, triangles of a tet;
+// a triangle's fourth key unused), as cut-point keys.
 std::vector<Tet> cut_cell(const Mesh &mesh, CellId c, int axis, double value,
                           const std::map<std::array<VertexId, 4>, CellId> &owners) {
   const Pentatope p = classify(mesh, c, axis, value);
+  const int k = p.n - 2; // dimension of the section
   std::vector<Tet> tets;
-  if (crosses(p, 0x1fu)) {
-    for (const std::vector<Key> &piece : pulling(p, 0x1fu, 3)) {
-      assert(piece.size() == 4);
-      tets.push_back({piece[0], piece[1], piece[2], piece[3]});
+  if (crosses(p, p.all())) {
+    for (const std::vector<Key> &piece : pulling(p, p.all(), k)) {
+      assert(int(piece.size()) == k + 1);
+      Tet t{};
+      std::copy(piece.begin(), piece.end(), t.begin());
+      tets.push_back(t);
     }
-  } else if (count_side(p, 0) == 4) {
-    std::vector<Key> pts = section_points(p, 0x1fu);
-    std::array<VertexId, 4> facet{};
-    for (int i = 0; i < 4; ++i)
+  } else if (count_side(p, 0) == p.n - 1) {
+    std::vector<Key> pts = section_points(p, p.all());
+    std::array<VertexId, 4> facet{kNoVertex, kNoVertex, kNoVertex, kNoVertex};
+    for (int i = 0; i <= k; ++i)
       facet[i] = key_first(pts[i]);
-    std::sort(facet.begin(), facet.end());
-    if (owners.at(facet) == c) tets.push_back({pts[0], pts[1], pts[2], pts[3]});
+    std::sort(facet.begin(), facet.begin() + k + 1);
+    if (owners.at(facet) == c) {
+      Tet t{};
+      std::copy(pts.begin(), pts.end(), t.begin());
+      tets.push_back(t);
+    }
   }
   return tets;
 }
@@ -191,7 +206,7 @@ struct VertexMaker {
     const double *pa = in.point(a), *pb = in.point(b);
     // Parameter along a -> b (a < b) where x[axis] reaches the value.
     const double lambda = a == b ? 0.0 : (value - pa[axis]) / (pb[axis] - pa[axis]);
-    for (int d = 0; d < 4; ++d)
+    for (int d = 0; d < in.dim; ++d)
       if (d != axis) out.coords.push_back(a == b ? pa[d] : pa[d] + lambda * (pb[d] - pa[d]));
     for (std::size_t n = 0; n < in.point_data.size(); ++n) {
       const DataArray &src = in.point_data[n];
@@ -204,13 +219,14 @@ struct VertexMaker {
   }
 };
 
-// Appends tet t (as output ids), positively oriented.
+// Appends simplex t (out.dim + 1 output ids), positively oriented.
 void emit_tet(Mesh &out, std::array<VertexId, 4> t) {
+  const int d = out.dim, nv = d + 1;
   double pts[12];
-  for (int i = 0; i < 4; ++i)
-    std::copy(out.point(t[i]), out.point(t[i]) + 3, pts + 3 * i);
-  if (signed_volume(pts, 3) < 0) std::swap(t[2], t[3]);
-  out.cells.insert(out.cells.end(), t.begin(), t.end());
+  for (int i = 0; i < nv; ++i)
+    std::copy(out.point(t[i]), out.point(t[i]) + d, pts + d * i);
+  if (signed_volume(pts, d) < 0) std::swap(t[nv - 2], t[nv - 1]);
+  out.cells.insert(out.cells.end(), t.begin(), t.begin() + nv);
 }
 
 void copy_cell_data(const Mesh &in, const std::vector<CellId> &parent, Mesh &out) {
@@ -228,13 +244,14 @@ void copy_cell_data(const Mesh &in, const std::vector<CellId> &parent, Mesh &out
 } // namespace
 
 Mesh slice_mesh(const Mesh &mesh4, int axis, double value) {
-  if (mesh4.dim != 4)
-    throw InputError("", "slice: needs a 4D mesh, got dimension " + std::to_string(mesh4.dim));
-  if (axis < 0 || axis > 3)
-    throw InputError("", "slice: axis must be 0, 1, 2 or 3 (t), got " + std::to_string(axis));
+  if (mesh4.dim != 4 && mesh4.dim != 3)
+    throw InputError("", "slice: needs a 3D or 4D mesh, got dimension " + std::to_string(mesh4.dim));
+  if (axis < 0 || axis >= mesh4.dim)
+    throw InputError("", "slice: axis must be 0.." + std::to_string(mesh4.dim - 1) + ", got " +
+                             std::to_string(axis));
 
   Mesh out;
-  out.dim = 3;
+  out.dim = mesh4.dim - 1;
   for (const DataArray &a : mesh4.point_data)
     out.point_data.push_back({a.name, a.components, {}});
 
@@ -243,7 +260,9 @@ Mesh slice_mesh(const Mesh &mesh4, int axis, double value) {
   std::vector<CellId> parent;
   for (std::size_t c = 0; c < mesh4.num_cells(); ++c) {
     for (const Tet &t : cut_cell(mesh4, CellId(c), axis, value, owners)) {
-      emit_tet(out, {maker.get(t[0]), maker.get(t[1]), maker.get(t[2]), maker.get(t[3])});
+      std::array<VertexId, 4> ids{kNoVertex, kNoVertex, kNoVertex, kNoVertex};
+      for (int i = 0; i <= out.dim; ++i) ids[i] = maker.get(t[i]);
+      emit_tet(out, ids);
       parent.push_back(CellId(c));
     }
   }

@@ -1,4 +1,5 @@
-// Sections of 4D meshes by the hyperplanes x[axis] = value (e.g. t = const).
+// Sections of 4D meshes by the hyperplanes x[axis] = value (e.g. t = const),
+// and of 3D meshes by planes (the time slices of a 2D+t mesh).
 #pragma once
 
 #include "mesh.hpp"
@@ -21,7 +22,11 @@ namespace bisect {
 // `bisect:*` state arrays are not copied. A hyperplane missing the mesh gives
 // an empty mesh (dim 3, no vertices, no cells).
 //
-// Throws InputError when mesh4.dim != 4 or axis is not in 0..3.
+// A 3D tetrahedral mesh gives the same for one dimension less: a conforming
+// 2D triangle mesh (cut triangles and quadrilaterals, the latter split by
+// the diagonal through the smallest-key cut point).
+//
+// Throws InputError when mesh4.dim is not 3 or 4 or axis is not in 0..dim-1.
 Mesh slice_mesh(const Mesh &mesh4, int axis, double value);
 
 } // namespace bisect

@@ -175,9 +175,37 @@ TEST_CASE("slice: a hyperplane missing the mesh gives an empty 3D mesh", "[slice
   }
 }
 
-TEST_CASE("slice: bad axis or a mesh that is not 4D is rejected", "[slice][4d]") {
+TEST_CASE("slice: bad axis or a mesh that is not 3D or 4D is rejected", "[slice][4d]") {
   const Mesh m = generate_kuhn(4, 1);
   REQUIRE_THROWS_AS(slice_mesh(m, 4, 0.5), InputError);
   REQUIRE_THROWS_AS(slice_mesh(m, -1, 0.5), InputError);
-  REQUIRE_THROWS_AS(slice_mesh(generate_kuhn(3, 1), 2, 0.5), InputError);
+  REQUIRE_THROWS_AS(slice_mesh(generate_kuhn(3, 1), 3, 0.5), InputError);
+  REQUIRE_THROWS_AS(slice_mesh(generate_kuhn(2, 1), 1, 0.5), InputError);
+}
+
+TEST_CASE("slice: sections of locally refined 3D (2D+t) meshes are conforming unit squares", "[slice][3d]") {
+  // Planes through the interior, through vertices of the initial mesh (in-plane
+  // triangles must appear once) and through midpoints made by refinement.
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    for (Marking mk : {Marking::Longest, Marking::Sorted}) {
+      Mesh m = testing::renumbered(testing::perturbed_inside_box(generate_kuhn(3, 3), 0.05, seed), seed);
+      prepare_input(m, "kuhn");
+      mark_mesh(m, mk);
+      auto region = parse_region(R"({"type":"sphere","center":[0.4,0.5,0.45],"radius":0.3})", 3, "r");
+      for (int it = 0; it < 5; ++it) refine(m, select_cells(m, *region));
+      for (int axis = 0; axis < 3; ++axis)
+        for (double v : {0.0, 0.2, 0.5, 0.55, 1.0}) {
+          Mesh s = slice_mesh(m, axis, v);
+          INFO("seed " << seed << " axis " << axis << " value " << v);
+          REQUIRE(s.dim == 2);
+          const CheckResult r = check_conformity(s);
+          INFO(r.failure);
+          REQUIRE(r.ok);
+          const Invariants inv = measure_invariants(s);
+          REQUIRE(inv.volume == Approx(1.0).epsilon(1e-12));
+          REQUIRE(inv.boundary_measure == Approx(4.0).epsilon(1e-12));
+          REQUIRE(inv.euler == 1);
+        }
+    }
+  }
 }

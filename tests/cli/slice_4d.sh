@@ -18,7 +18,16 @@ expect_exit 0 "$BISECT" refine cube6.vtu --region "$ROOT/data/regions/moving-sph
 expect_exit 0 "$BISECT" check cube8.vtu --against cube.vtu
 expect_exit 0 "$BISECT" slice cube8.vtu --axis x --value 0.3 -o x.vtu
 expect_exit 0 "$BISECT" check x.vtu
-# --slices on a 3D mesh is a usage error.
-expect_exit 1 "$BISECT" refine "$ROOT/data/ball.msh" --region "$ROOT/data/regions/sphere.json" --slices 0 -o b.vtu
-one_line_naming "4D"
+# A 3D (2D+t) mesh slices into a conforming 2D triangle mesh; refine --slices too.
+expect_exit 0 "$BISECT" generate kuhn --dim 3 --cells 2 -o k3.vtu
+expect_exit 0 "$BISECT" slice k3.vtu --t 0.25 -o k3s.vtu
+grep -q "triangles" "$WORK/err" || fail "no triangle count in the message"
+expect_exit 0 "$BISECT" info k3s.vtu
+grep -q "^dimension: 2$" "$WORK/out" || fail "slice of a 3D mesh is not 2D"
+grep -q "^volume: 1$" "$WORK/out" || fail "slice of the unit cube is not the unit square"
+expect_exit 0 "$BISECT" refine k3.vtu --region "$ROOT/data/regions/sphere.json" -n 3 -o k3r.vtu --slices 0,0.5,1 --quiet
+for t in 0 0.5 1; do expect_exit 0 "$BISECT" check k3r.t$t.vtu; done
+expect_exit 1 "$BISECT" slice k3.vtu --axis t --value 0.5 -o /dev/null/x.vtu
+expect_exit 1 "$BISECT" refine "$ROOT/data/square.msh" --region "$ROOT/data/regions/circle.json" --slices 0.5 -o sq.vtu
+one_line_naming "square.msh"
 echo "slice_4d: ok"
