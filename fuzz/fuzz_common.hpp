@@ -36,24 +36,63 @@ inline std::string write_temp(const std::uint8_t *data, std::size_t size, const 
   std::abort();
 }
 
+struct RefineCheck {
+  int iterations = 2;
+  std::size_t max_input_cells = 400; // larger accepted meshes are not refined
+  std::size_t max_cells = 20000;     // refine's limit: an iteration past it is undone
+  int roundtrip_after = 0;           // after this iteration (0: never), the state goes
+                                     // through its cell arrays and back
+};
+
 // An accepted (prepared, marked) mesh must refine to a conforming mesh with
-// the same volume, boundary measure and Euler characteristic. Small meshes
-// only, with a cell limit, so one input stays fast.
-inline void refine_and_check(bisect::Mesh &mesh, const bisect::Region &region, int iterations) {
+// the same volume, boundary measure and Euler characteristic, checked in full
+// (check_conformity against the input's invariants) after every iteration.
+// The sizes are capped so that one input stays fast. With BISECT_FUZZ_TRACE
+// set, one line per iteration on stderr (for tuning the caps).
+inline void refine_and_check(bisect::Mesh &mesh, const bisect::Region &region,
+                             const RefineCheck &how) {
   using namespace bisect;
-  if (mesh.num_cells() > 400)
+  if (mesh.num_cells() > how.max_input_cells)
     return;
+  static const bool trace = std::getenv("BISECT_FUZZ_TRACE") != nullptr;
   const Invariants before = measure_invariants(mesh);
+  // The full check, with the measure standing in for the vertex search where
+  // that is exact (see CheckOptions): the meshes here are small.
+  CheckOptions options;
+  options.refined_from_original = true;
   RefineLimits limits;
-  limits.max_cells = 20000;
-  for (int it = 0; it < iterations; ++it) {
+  limits.max_cells = how.max_cells;
+  for (int it = 1; it <= how.iterations; ++it) {
     const std::vector<CellId> selected = select_cells(mesh, region);
-    const RefineResult r = refine(mesh, selected, limits);
-    if (r.limit_reached)
+    if (selected.empty()) // nothing changes now or in any later iteration
       break;
-    const CheckResult c = check_conformity(mesh, &before);
+    const std::size_t cells_before = mesh.num_cells();
+    const RefineResult r = refine(mesh, selected, limits);
+    if (r.limit_reached) {
+      if (mesh.num_cells() != cells_before)
+        fail("iteration " + std::to_string(it) + " passed the limit but was not undone");
+      break;
+    }
+    if (mesh.num_cells() < cells_before + selected.size())
+      fail("iteration " + std::to_string(it) + ": " + std::to_string(selected.size()) +
+           " cells selected but only " + std::to_string(mesh.num_cells() - cells_before) +
+           " cells added");
+    const CheckResult c = check_conformity(mesh, &before, options);
     if (!c.ok)
-      fail("after iteration " + std::to_string(it + 1) + ": " + c.failure);
+      fail("after iteration " + std::to_string(it) + ": " + c.failure);
+    if (trace)
+      std::fprintf(stderr, "TRACE dim %d it %d cells %zu\n", mesh.dim, it, mesh.num_cells());
+    if (it == how.roundtrip_after) {
+      // What a file carries: encode, decode, and the same tuples, Stage and tag.
+      const std::vector<VertexId> cells = mesh.cells;
+      const std::vector<Stage> stage = mesh.stage;
+      const std::vector<std::uint8_t> tag = mesh.tag;
+      encode_state(mesh);
+      if (!decode_state(mesh, "fuzz"))
+        fail("decode_state found no state after encode_state");
+      if (mesh.cells != cells || mesh.stage != stage || mesh.tag != tag)
+        fail("the bisection state changed through encode_state/decode_state");
+    }
   }
 }
 
@@ -82,7 +121,10 @@ inline int fuzz_mesh_file(const std::uint8_t *data, std::size_t size, const char
     c += (d ? "," : "") + std::to_string(mesh.coords[d]);
   const auto region = parse_region(
       "{\"type\":\"sphere\",\"solid\":true,\"radius\":0.5,\"center\":" + c + "]}", mesh.dim, "fuzz");
-  refine_and_check(mesh, *region, 2);
+  RefineCheck how;
+  how.iterations = 2;
+  how.max_cells = 5000;
+  refine_and_check(mesh, *region, how);
   return 0;
 }
 

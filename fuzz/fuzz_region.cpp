@@ -27,7 +27,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
       bisect_fuzz::fail("parse_region returned null");
     std::vector<double> lo(dim), hi(dim);
     region->bounds(lo.data(), hi.data(), dim);
-    const Mesh kuhn = generate_kuhn(dim, 2, -1.0, 2.0);
+    static const Mesh kuhns[3] = {generate_kuhn(2, 2, -1.0, 2.0), generate_kuhn(3, 2, -1.0, 2.0),
+                                  generate_kuhn(4, 2, -1.0, 2.0)}; // made once
+    const Mesh &kuhn = kuhns[dim - 2];
     std::vector<double> verts((dim + 1) * dim);
     for (std::size_t c = 0; c < kuhn.num_cells(); ++c) {
       for (int i = 0; i <= dim; ++i)

@@ -4,11 +4,18 @@
 # and bad sample files. Crashing, leaking or hanging inputs are kept in
 # fuzz/crashes/<target>/. Usage: scripts/fuzz.sh [target...]
 #   FUZZ_SECONDS=600 scripts/fuzz.sh fuzz_msh
+#   FUZZ_RUNS=1000000 scripts/fuzz.sh fuzz_refine   # one run of a million executions
+# The corpus in build-fuzz/corpus/<target> is kept between runs, so a second
+# run starts where the first stopped. One process, one core.
 # Needs clang and libclang-rt-14-dev (Debian 12: apt-get install clang libclang-rt-14-dev).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=${BUILD_DIR:-$ROOT/build-fuzz}
 SECONDS_EACH=${FUZZ_SECONDS:-60}
+RUNS=${FUZZ_RUNS:-}
+# With FUZZ_RUNS, the run stops after that many executions (FUZZ_SECONDS, if
+# also given, still caps it).
+[[ -n $RUNS && -z ${FUZZ_SECONDS:-} ]] && SECONDS_EACH=86400
 TARGETS=("$@")
 [[ ${#TARGETS[@]} -gt 0 ]] || TARGETS=(fuzz_msh fuzz_vtu fuzz_region fuzz_refine)
 
@@ -95,7 +102,9 @@ for t in "${TARGETS[@]}"; do
     fuzz_msh) dict=(-dict="$BUILD/msh.dict") ;;
     fuzz_region) dict=(-dict="$BUILD/region.dict") ;;
   esac
-  echo "== $t: ${SECONDS_EACH}s"
+  runs=()
+  [[ -n $RUNS ]] && runs=(-runs="$RUNS")
+  echo "== $t: ${RUNS:+$RUNS executions, at most }${SECONDS_EACH}s"
   # Stops at the first crash, leak or timeout, whose input is written to
   # fuzz/crashes/<target>/. FUZZ_KEEP_GOING=1 forks and goes on after one.
   keep=()
@@ -106,12 +115,12 @@ for t in "${TARGETS[@]}"; do
   [[ $t == fuzz_vtu ]] && leaks=0
   ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=$leaks:allocator_may_return_null=0} \
   UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1} \
-    "$BUILD/$t" "$BUILD/corpus/$t" "${dict[@]}" "${keep[@]}" -max_total_time="$SECONDS_EACH" \
+    "$BUILD/$t" "$BUILD/corpus/$t" "${dict[@]}" "${keep[@]}" "${runs[@]}" -max_total_time="$SECONDS_EACH" \
       -timeout=10 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1 \
       -artifact_prefix="$CRASHES/$t/" >"$BUILD/$t.log" 2>&1
   rc=$?
   set -e
-  grep -E 'SUMMARY|ERROR: libFuzzer|Test unit written|crash saved|stat::number_of_executed_units' "$BUILD/$t.log" | sort | uniq -c || true
+  grep -E 'SUMMARY|ERROR: libFuzzer|FUZZ PROPERTY FAILED|Test unit written|crash saved|stat::number_of_executed_units|stat::average_exec_per_sec' "$BUILD/$t.log" | sort | uniq -c || true
   # The last progress line: executions, coverage, crashes (fork mode counts them).
   grep -E '^#[0-9]+' "$BUILD/$t.log" | tail -1 || true
   [[ $rc == 0 ]] || { echo "$t: exit $rc (see $BUILD/$t.log and $CRASHES/$t/)"; status=1; }
