@@ -325,3 +325,50 @@ TEST_CASE("prepare_input rejects bad coordinates and ids, naming the file and th
     CHECK(m.tag == std::vector<std::uint8_t>{2});
   }
 }
+
+TEST_CASE("check: two tets that split their shared face differently, without a hanging node, "
+          "are found with or without the original",
+          "[check][3d]") {
+  // Face ABC (z = 0) between apex P above and apex Q below, with M the
+  // midpoint of AB and N that of BC on both sides. Above, the face is cut into
+  // MBN, AMC, MNC; below into MBN, AMN, ANC: the same five vertices, no vertex
+  // on a facet of the other side, but AMC/MNC and AMN/ANC do not match.
+  // Bisection can make this: AB then BC on one side, BC then AB on the other.
+  const std::vector<double> xyz = {0, 0, 0,   1, 0, 0,   0, 1, 0,    // A B C
+                                   0.5, 0, 0, 0.5, 0.5, 0,           // M N
+                                   0.3, 0.3, 1, 0.3, 0.3, -1};       // P Q
+  enum : VertexId { A, B, C, M, N, P, Q };
+  const Mesh original = make_mesh(3, xyz, {A, B, C, P, A, B, C, Q});
+  const Invariants before = measure_invariants(original);
+  REQUIRE(check_conformity(original).ok);
+
+  const Mesh split = make_mesh(3, xyz, {P, M, B, N, P, A, M, C, P, M, N, C,   // above
+                                        Q, M, B, N, Q, A, M, N, Q, A, N, C}); // below
+  const CheckResult c = check_conformity(split);
+  CHECK_FALSE(c.ok);
+  CHECK_THAT(c.failure, Contains("overlap: the cells on the two sides of a face split it "
+                                 "differently"));
+  CHECK_THAT(c.failure, StartsWith("boundary facets ("));
+  // Volume is kept; the unmatched patches count as boundary on both sides.
+  const Invariants after = measure_invariants(split);
+  CHECK(after.volume == Approx(before.volume).epsilon(1e-12));
+  CHECK(after.boundary_measure == Approx(before.boundary_measure + 2 * 0.375).epsilon(1e-12));
+  CHECK_THAT(check_conformity(split, &before).failure, Contains("overlap"));
+  // With the measure standing in for the search (CheckOptions), the same mesh
+  // fails through its boundary measure.
+  CheckOptions refined;
+  refined.refined_from_original = true;
+  CHECK_THAT(check_conformity(split, &before, refined).failure,
+             StartsWith("boundary measure changed"));
+  // Reading such a mesh is refused too.
+  CHECK_THAT(prepare_error(split, "split.vtu"),
+             StartsWith("split.vtu: non-conforming input: boundary facets ("));
+
+  // The same five vertices split alike on both sides: conforming, and the
+  // search stays quiet.
+  const Mesh alike = make_mesh(3, xyz, {P, M, B, N, P, A, M, C, P, M, N, C,   // above
+                                        Q, M, B, N, Q, A, M, C, Q, M, N, C}); // below
+  CHECK(check_conformity(alike).ok);
+  CHECK(check_conformity(alike, &before).ok);
+  CHECK(check_conformity(alike, &before, refined).ok);
+}
