@@ -44,6 +44,7 @@
 #include <cstring>
 #include <limits>
 #include <mutex>
+#include <set>
 #include <string>
 #include <algorithm>
 #include <string_view>
@@ -370,6 +371,11 @@ Mesh grid_to_mesh(const std::string &path, vtkUnstructuredGrid *grid) {
     vtkIdType npts = 0;
     const vtkIdType *pts = nullptr;
     grid->GetCellPoints(c, npts, pts);
+    if (npts != nvc) // VTK takes the offsets as they come
+      throw InputError(path, "cell " + std::to_string(c) + " is a " +
+                                 (nvc == 3 ? "triangle" : nvc == 4 ? "tetrahedron" : "pentatope") +
+                                 " with " + std::to_string(npts) + " vertices, expected " +
+                                 std::to_string(nvc));
     for (int i = 0; i < nvc; ++i) {
       if (pts[i] < 0 || pts[i] >= np)
         throw InputError(path, "cell " + std::to_string(c) + " refers to point " +
@@ -621,10 +627,32 @@ void check_ascii_arrays(const std::string &path) {
   bool compressed = false;
   int header_bytes = 4;
   enum { None, InPoints, InPointData, InCellData, InCells } section = None;
+  std::set<std::string> names; // of the arrays in the current section
   std::size_t pos = 0;
   while ((pos = text.find('<', pos)) != std::string::npos) {
-    std::size_t close = text.find('>', pos);
-    if (close == std::string::npos) return; // VTK reports broken XML
+    if (text.compare(pos, 4, "<!--") == 0) { // a comment may hold anything
+      pos = text.find("-->", pos);
+      if (pos == std::string::npos) return;
+      continue;
+    }
+    // The tag ends at the first '>' outside quotes. A '>' inside an
+    // attribute value is legal XML, but VTK 9.1 takes the first '>' after
+    // the element's start as the start of its inline data and crashes.
+    std::size_t close = pos;
+    for (char quote = 0; close < text.size(); ++close) {
+      const char ch = text[close];
+      if (quote && ch == '>')
+        throw InputError(path, "a '>' inside an attribute value of the element at byte " +
+                                   std::to_string(pos) + " (write it as &gt;)");
+      if (quote) {
+        if (ch == quote) quote = 0;
+      } else if (ch == '"' || ch == '\'') {
+        quote = ch;
+      } else if (ch == '>') {
+        break;
+      }
+    }
+    if (close == text.size()) return; // VTK reports broken XML
     std::string tag = text.substr(pos, close - pos + 1);
     pos = close + 1;
     auto starts = [&](const char *t) { return tag.rfind(t, 0) == 0; };
@@ -636,7 +664,14 @@ void check_ascii_arrays(const std::string &path) {
         throw InputError(path, "header_type \"" + h + "\" is not UInt32 or UInt64");
       header_bytes = h == "UInt64" ? 8 : 4;
     }
+    if (starts("<Piece") || starts("<Points") || starts("<PointData") || starts("<CellData") ||
+        starts("<Cells") || starts("<FieldData"))
+      names.clear();
     if (starts("<DataArray")) {
+      // VTK 9.1 crashes on two arrays of one name in a section.
+      const std::string name = attribute(tag, "Name");
+      if (!name.empty() && !names.insert(name).second)
+        throw InputError(path, "two arrays named '" + name + "' in one section");
       static const char *kTypes[] = {"Int8",   "UInt8",  "Int16",   "UInt16",  "Int32", "UInt32",
                                      "Int64",  "UInt64", "Float32", "Float64", "String", "Bit"};
       std::string type = attribute(tag, "type");
@@ -650,27 +685,60 @@ void check_ascii_arrays(const std::string &path) {
                                    std::string_view(text).substr(pos, end - pos), header_bytes);
       }
     }
+    // Counts far past what a file can hold would overflow the products below.
+    auto count_of = [&](const char *attr, long long max) {
+      const long long v = std::atoll(attribute(tag, attr).c_str());
+      if (v < 0 || v > max)
+        throw InputError(path, std::string(attr) + " \"" + attribute(tag, attr) + "\" is out of range");
+      return v;
+    };
     if (starts("<Piece")) {
-      points = std::atoll(attribute(tag, "NumberOfPoints").c_str());
-      cells = std::atoll(attribute(tag, "NumberOfCells").c_str());
+      points = count_of("NumberOfPoints", 1LL << 40);
+      cells = count_of("NumberOfCells", 1LL << 40);
     } else if (starts("<Points")) section = InPoints;
     else if (starts("<PointData")) section = InPointData;
     else if (starts("<CellData")) section = InCellData;
     else if (starts("<Cells")) section = InCells;
     else if (starts("</Points") || starts("</PointData") || starts("</CellData") || starts("</Cells"))
       section = None;
-    else if (starts("<DataArray") && attribute(tag, "format") == "ascii" && tag.back() == '>' &&
+    else if (starts("<DataArray") && attribute(tag, "format") != "appended" && tag.back() == '>' &&
              tag[tag.size() - 2] != '/') {
+      // VTK reads any format but "binary" and "appended" as ascii.
       std::size_t end = text.find("</DataArray>", pos);
       if (end == std::string::npos) return;
       std::string name = attribute(tag, "Name");
       if (name.empty()) name = section == InPoints ? "Points" : "(unnamed)";
-      long long comps = std::max(1LL, std::atoll(attribute(tag, "NumberOfComponents").c_str()));
+      long long comps = std::max(1LL, count_of("NumberOfComponents", 1LL << 20));
       long long want = -1;
       if (section == InPoints) want = 3 * points;
       else if (section == InPointData) want = comps * points;
       else if (section == InCellData) want = comps * cells;
       else if (section == InCells && (name == "offsets" || name == "types")) want = cells;
+      if (attribute(tag, "format") == "binary") {
+        // Uncompressed inline binary: a byte count, then the bytes, in
+        // base64. VTK 9.1 trusts the count (compressed data: see above).
+        if (!compressed) {
+          const std::string_view content = std::string_view(text).substr(pos, end - pos);
+          const std::string head = base64_prefix(content, std::size_t(header_bytes));
+          if (head.size() < std::size_t(header_bytes))
+            throw InputError(path, "array '" + name + "': binary data too short");
+          unsigned long long bytes = 0;
+          for (int k = header_bytes - 1; k >= 0; --k) bytes = bytes << 8 | static_cast<unsigned char>(head[k]);
+          const std::string type = attribute(tag, "type");
+          const int size = type == "Int8" || type == "UInt8" ? 1 : type == "Int16" || type == "UInt16" ? 2
+                           : type == "Int32" || type == "UInt32" || type == "Float32" ? 4
+                           : type == "Int64" || type == "UInt64" || type == "Float64" ? 8 : 0;
+          if (bytes > content.size()) // base64 takes 4 characters for 3 bytes
+            throw InputError(path, "array '" + name + "': binary data claims " + std::to_string(bytes) +
+                                       " bytes in " + std::to_string(content.size()) + " characters");
+          if (want >= 0 && size && bytes != (unsigned long long)(want * size))
+            throw InputError(path, "array '" + name + "': binary data holds " + std::to_string(bytes) +
+                                       " bytes, expected " + std::to_string(want * size) + " (" +
+                                       std::to_string(want) + " values of " + type + ")");
+        }
+        pos = end;
+        continue;
+      }
       long long count = 0;
       const char *p = text.c_str() + pos, *stop = text.c_str() + end;
       while (p < stop) {
