@@ -2,6 +2,7 @@
 // Exit codes: 0 success, 1 usage or input error, 2 internal check failed,
 // 3 limit reached (the output is still a valid conforming mesh).
 #include "check.hpp"
+#include "colour.hpp"
 #include "extrude.hpp"
 #include "generate.hpp"
 #include "io.hpp"
@@ -19,9 +20,11 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <unistd.h>
 
@@ -161,7 +164,7 @@ struct RefineArgs {
   std::int64_t max_elements = 0;
   double max_memory_gib = 0;
   bool json = false, quiet = false, force = false, check = false;
-  std::vector<double> slices; // t values: 3D sections of the final 4D mesh
+  std::vector<double> slices; // t values (last coordinate): sections of the final mesh
 };
 
 // "<output stem>.t<value>.vtu" beside the output.
@@ -179,7 +182,8 @@ void write_slice(const Mesh &mesh, int axis, double value, const std::string &pa
   write_mesh(path, s);
   if (!quiet)
     std::cerr << "bisect: wrote " << path << " (" << with_commas(s.num_cells())
-              << " tetrahedra: the section " << "xyzt"[axis] << " = " << value << ")\n";
+              << (s.dim == 3 ? " tetrahedra" : " triangles") << ": the section "
+              << (axis == mesh.dim - 1 ? 't' : "xyz"[axis]) << " = " << value << ")\n";
 }
 
 std::string default_output(const std::string &input) {
@@ -190,6 +194,68 @@ std::string default_output(const std::string &input) {
 std::string default_csv(const std::string &output) {
   fs::path p(output);
   return (p.parent_path() / (p.stem().string() + ".quality.csv")).string();
+}
+
+// Test hook, not for users: BISECT_TEST_CORRUPT_ITERATION=k makes `refine`
+// undo one bisection made in iteration k, so that tests/cli/paranoid.sh can
+// watch --check catch a non-conforming mesh end to end. Of the vertices made
+// in that iteration (ids from `first_new`), the newest whose edge (a, b) was
+// bisected in at least two cells gets one pair of siblings (z, a, rest) and
+// (z, b, rest) merged back into (b, a, rest): z then hangs on the edge of
+// that cell. Cell arrays follow (the second sibling's slot takes the last
+// cell). Returns the vertex left hanging, or kNoVertex if none fitted.
+VertexId corrupt_one_bisection(Mesh &mesh, std::size_t first_new) {
+  const int n = mesh.cell_size(), dim = mesh.dim;
+  std::vector<std::vector<CellId>> around(mesh.num_vertices() - first_new);
+  for (std::size_t c = 0; c < mesh.num_cells(); ++c)
+    for (int i = 0; i < n; ++i)
+      if (mesh.cell(CellId(c))[i] >= first_new)
+        around[mesh.cell(CellId(c))[i] - first_new].push_back(CellId(c));
+  for (std::size_t z = mesh.num_vertices(); z-- > first_new;) {
+    const std::vector<CellId> &cells = around[z - first_new];
+    // Sibling pairs (cell with a, cell with b), keyed by the edge (a, b).
+    std::map<std::pair<VertexId, VertexId>, std::vector<std::pair<CellId, CellId>>> pairs;
+    for (std::size_t i = 0; i < cells.size(); ++i)
+      for (std::size_t j = 0; j < cells.size(); ++j) {
+        if (i == j) continue;
+        const VertexId *x = mesh.cell(cells[i]), *y = mesh.cell(cells[j]);
+        int only_x = -1, missing = 0;
+        for (int p = 0; p < n; ++p)
+          if (std::find(y, y + n, x[p]) == y + n) only_x = p, ++missing;
+        if (missing != 1) continue;
+        VertexId b = kNoVertex;
+        for (int p = 0; p < n; ++p)
+          if (std::find(x, x + n, y[p]) == x + n) b = y[p];
+        const VertexId va = x[only_x];
+        bool midpoint = true;
+        for (int d = 0; d < dim; ++d)
+          midpoint &= mesh.point(VertexId(z))[d] == 0.5 * (mesh.point(va)[d] + mesh.point(b)[d]);
+        if (midpoint && va < b) pairs[{va, b}].push_back({cells[i], cells[j]});
+      }
+    for (const auto &[edge, list] : pairs) {
+      if (list.size() < 2) continue; // one parent only: merging would leave no hanging node
+      const auto [keep, drop] = list.front();
+      VertexId *x = mesh.cell(CellId(keep));
+      std::replace(x, x + n, VertexId(z), edge.second); // (z, a, rest) -> (b, a, rest)
+      const std::size_t last = mesh.num_cells() - 1;
+      std::copy_n(mesh.cell(CellId(last)), n, mesh.cell(CellId(drop)));
+      mesh.cells.resize(last * n);
+      if (mesh.stage.size() > last) {
+        mesh.stage[drop] = mesh.stage[last];
+        mesh.tag[drop] = mesh.tag[last];
+        mesh.stage.resize(last);
+        mesh.tag.resize(last);
+      }
+      for (DataArray &arr : mesh.cell_data) {
+        const std::size_t k = std::size_t(arr.components);
+        std::copy_n(arr.values.begin() + std::ptrdiff_t(last * k), k,
+                    arr.values.begin() + std::ptrdiff_t(drop * k));
+        arr.values.resize(last * k);
+      }
+      return VertexId(z);
+    }
+  }
+  return kNoVertex;
 }
 
 int run_refine(const RefineArgs &a) {
@@ -205,11 +271,20 @@ int run_refine(const RefineArgs &a) {
     throw UsageError(out + ": output must end in .vtu or .msh");
 
   Mesh mesh = load_mesh(a.input, marking, a.quiet);
-  if (!a.slices.empty() && mesh.dim != 4)
-    throw UsageError("--slices needs a 4D mesh; " + a.input + " is " + std::to_string(mesh.dim) + "D");
+  if (!a.slices.empty() && mesh.dim < 3)
+    throw UsageError("--slices needs a 3D (2D+t) or 4D mesh; " + a.input + " is 2D");
   auto region = read_region(a.region, mesh.dim);
+  // --check (always on in a BISECT_PARANOID build): the full conformity check
+  // against the input's invariants after every iteration.
+#ifdef BISECT_PARANOID
+  const bool check = true;
+#else
+  const bool check = a.check;
+#endif
   Invariants before;
-  if (a.check) before = measure_invariants(mesh);
+  if (check) before = measure_invariants(mesh);
+  int corrupt_after = 0; // the test hook, see corrupt_one_bisection
+  if (const char *e = std::getenv("BISECT_TEST_CORRUPT_ITERATION")) corrupt_after = std::atoi(e);
 
   std::ostringstream rows;
   rows << "iteration,cells,vertices,selected,bisections,min_quality,max_quality,mean_quality,seconds\n";
@@ -242,6 +317,7 @@ int run_refine(const RefineArgs &a) {
       if (!a.quiet) std::cerr << "bisect: stopping before iteration " << it << ": " << why << "\n";
       break;
     }
+    const std::size_t verts_before = mesh.num_vertices();
     RefineResult r = refine(mesh, selected, limits);
     if (r.cancelled) break;
     if (r.limit_reached) {
@@ -271,17 +347,20 @@ int run_refine(const RefineArgs &a) {
     if (selected.empty()) {
       if (!a.quiet) std::cerr << "bisect: the region touches no cell; nothing more to refine\n";
     }
+    if (it == corrupt_after && corrupt_one_bisection(mesh, verts_before) == kNoVertex)
+      std::cerr << "bisect: BISECT_TEST_CORRUPT_ITERATION=" << it << ": no bisection to undo\n";
+    if (check) {
+      CheckResult c = check_conformity(mesh, &before);
+      if (!c.ok) {
+        std::cerr << "bisect: internal check failed after iteration " << it << ": " << c.failure
+                  << "\n";
+        return kExitCheck;
+      }
+    }
   }
   if (g_interrupted) {
     std::cerr << "bisect: interrupted; no output written\n";
     return kExitInterrupted;
-  }
-  if (a.check) {
-    CheckResult c = check_conformity(mesh, &before);
-    if (!c.ok) {
-      std::cerr << "bisect: internal check failed after refinement: " << c.failure << "\n";
-      return kExitCheck;
-    }
   }
   write_text_file(csv, rows.str());
   try {
@@ -291,7 +370,7 @@ int run_refine(const RefineArgs &a) {
     fs::remove(csv, ec); // never half a result
     throw;
   }
-  for (double t : a.slices) write_slice(mesh, 3, t, slice_path(out, "t", t), a.quiet);
+  for (double t : a.slices) write_slice(mesh, mesh.dim - 1, t, slice_path(out, "t", t), a.quiet);
   double total = seconds_since(t_start);
   if (a.json) {
     nlohmann::json j;
@@ -459,9 +538,112 @@ int run_quality(const std::string &path, bool classes, int bins) {
 int write_generated(Mesh mesh, const std::string &out, bool force) {
   std::error_code ec;
   if (!force && fs::exists(out, ec)) throw UsageError(out + ": already exists (use --force to overwrite)");
+  if (mesh.marked()) encode_state(mesh);
   write_mesh(out, mesh);
   std::cout << "wrote " << out << " (" << mesh.num_cells() << " cells, " << mesh.num_vertices()
             << " vertices)\n";
+  return kExitOk;
+}
+
+// ---------------------------------------------------------------- colour ---
+
+// Reads a 2D or 3D mesh for `colour` and `extrude --method colouring`.
+Mesh read_colourable(const std::string &path, const char *command) {
+  Mesh mesh = read_mesh(path);
+  prepare_input(mesh, path);
+  if (mesh.dim != 2 && mesh.dim != 3)
+    throw InputError(path, std::string(command) + " needs a 2D triangle or 3D tetrahedral mesh, this one is " +
+                               std::to_string(mesh.dim) + "D");
+  return mesh;
+}
+
+// The colouring of `mesh`: with `barycentric` the mesh is replaced by its
+// barycentric subdivision, coloured by vertex kind; otherwise its point array
+// `colour` when present (it must be proper) unless `recompute`, else found by
+// propagation. `how` says which. Throws InputError naming `path` when there
+// is none.
+std::vector<std::uint8_t> colouring_of(Mesh &mesh, const std::string &path, bool barycentric,
+                                       bool recompute, std::string &how) {
+  const std::string colours = std::to_string(mesh.dim + 1) + "-colouring";
+  std::vector<std::uint8_t> colour;
+  if (barycentric) {
+    try {
+      mesh = barycentric_subdivision(mesh, &colour);
+    } catch (const InputError &e) {
+      throw InputError(path, e.what());
+    }
+    how = colours + " of the barycentric subdivision by vertex kind (" +
+          (mesh.dim == 3 ? "A vertex, B edge centre, C face centre, D cell centre)"
+                         : "A vertex, B edge centre, C cell centre)");
+    return colour;
+  }
+  std::optional<std::vector<std::uint8_t>> given;
+  if (!recompute) {
+    try {
+      given = colour_array(mesh);
+    } catch (const InputError &e) {
+      throw InputError(path, e.what());
+    }
+  }
+  if (given) {
+    if (std::string why = check_colouring(mesh, *given); !why.empty())
+      throw InputError(path, std::string("point array ") + kColourArray + " is not a proper " + colours +
+                                 ": " + why);
+    how = colours + " given by the point array " + kColourArray;
+    return *given;
+  }
+  Colouring c = colour_mesh(mesh);
+  if (!c.ok)
+    throw InputError(path, "no proper " + colours + ": " + c.why + "; --barycentric subdivides the mesh into one that has");
+  how = colours + " found by propagation (" + std::to_string(c.components) +
+        (c.components == 1 ? " component)" : " components)");
+  return std::move(c.colour);
+}
+
+int run_colour(const std::string &in, bool barycentric, bool recompute, const std::string &out, bool force) {
+  if (!out.empty()) {
+    refuse_overwrite(out, in, force);
+    if (fs::path(out).extension() != ".vtu" && fs::path(out).extension() != ".msh")
+      throw UsageError(out + ": output must end in .vtu or .msh");
+  }
+  Mesh mesh = read_colourable(in, "colour");
+  std::string how;
+  std::vector<std::uint8_t> colour = colouring_of(mesh, in, barycentric, recompute, how);
+  std::vector<std::size_t> count(std::size_t(mesh.dim + 1), 0);
+  std::vector<char> used(mesh.num_vertices(), 0);
+  for (VertexId v : mesh.cells) used[v] = 1;
+  for (std::size_t v = 0; v < used.size(); ++v)
+    if (used[v]) count[colour[v]]++;
+  std::cout << in << ": " << how << "\n" << "cells: " << mesh.num_cells() << "\n";
+  for (int k = 0; k <= mesh.dim; ++k)
+    std::cout << "colour " << k << " (" << "ABCD"[k] << "): " << count[std::size_t(k)] << " vertices\n";
+  if (!out.empty()) {
+    set_colour_array(mesh, colour);
+    write_mesh(out, mesh);
+    std::cout << "wrote " << out << " (" << mesh.num_cells() << " cells, " << mesh.num_vertices()
+              << " vertices, point array " << kColourArray << ")\n";
+  }
+  return kExitOk;
+}
+
+// extrude --method colouring: prisms cut and tagged by the colouring (seed 001).
+int run_extrude_colouring(const std::string &in, const std::vector<double> &slices, bool barycentric,
+                          const std::string &out) {
+  std::string ext = fs::path(out).extension().string();
+  if (ext != ".vtu" && ext != ".msh") throw UsageError(out + ": output must end in .vtu or .msh");
+  Mesh mesh = read_colourable(in, "extrude --method colouring");
+  if (mesh.dim == 3 && ext != ".vtu") throw UsageError(out + ": a 4D mesh can only be written as .vtu");
+  std::string how;
+  std::vector<std::uint8_t> colour = colouring_of(mesh, in, barycentric, false, how);
+  Mesh st;
+  try {
+    st = extrude_coloured(mesh, colour, slices);
+  } catch (const InputError &e) {
+    throw InputError(in, e.what());
+  }
+  write_output_mesh(out, st);
+  std::cout << "wrote " << out << " (" << st.num_cells() << (st.dim == 4 ? " pentatopes, " : " tetrahedra, ")
+            << st.num_vertices() << " vertices; tagged by the " << how << ")\n";
   return kExitOk;
 }
 
@@ -489,7 +671,7 @@ int main(int argc, char **argv) {
                      std::string(kExitCodesHelp));
   refine_cmd->add_option("input", ra.input, "Input mesh (.vtu or .msh)")->required();
   refine_cmd->add_option("--region,-r", ra.region, "Region spec (JSON): sphere, hemisphere, box, "
-                                                  "halfspace, moving_sphere, union, intersection")
+                                                  "halfspace, moving_sphere, levelset, union, intersection")
       ->required();
   refine_cmd->add_option("--iterations,-n", ra.iterations, "Refinement iterations (default 1)")
       ->check(CLI::Range(0, 10000));
@@ -509,47 +691,81 @@ int main(int argc, char **argv) {
                          "GiB; default: the memory available now")
       ->check(CLI::PositiveNumber);
   refine_cmd->add_option("--slices", ra.slices,
-                         "4D only: also write the sections t = T1,T2,... of the final mesh as 3D "
-                         "meshes <output stem>.t<T>.vtu")
+                         "Also write the sections t = T1,T2,... of the final mesh (t: the last "
+                         "coordinate; 4D -> 3D tets, 2D+t -> 2D triangles) as <output stem>.t<T>.vtu")
       ->delimiter(',');
   refine_cmd->add_flag("--json", ra.json, "Print a JSON summary on stdout");
   refine_cmd->add_flag("--quiet,-q", ra.quiet, "No progress output on stderr");
   refine_cmd->add_flag("--force,-f", ra.force, "Overwrite existing output files (never the input)");
   refine_cmd->add_flag("--check", ra.check,
-                       "Check conformity, volume, boundary and Euler characteristic at the end "
-                       "(exit 2 on failure)");
+                       "After every iteration, check conformity and that volume, boundary measure "
+                       "and Euler characteristic are those of the input (exit 2 naming the "
+                       "iteration and the failure, no output written); always on in a "
+                       "BISECT_PARANOID build");
 
   std::string slice_in, slice_out, slice_axis = "t";
   double slice_value = 0;
   bool slice_force = false;
   auto *slice_cmd = app.add_subcommand(
       "slice", "Cut a 4D mesh by the hyperplane {axis = value} into a conforming 3D tetrahedral "
-               "mesh for ParaView (prisms are split into three tetrahedra).");
+               "mesh for ParaView (prisms are split into three tetrahedra), or a 3D (2D+t) mesh "
+               "by a plane into a conforming triangle mesh.");
   slice_cmd->footer("Example: bisect slice hypercube-25.vtu --t 0.5 -o section.vtu");
-  slice_cmd->add_option("input", slice_in, "4D mesh (.vtu)")->required();
+  slice_cmd->add_option("input", slice_in, "4D mesh (.vtu), or 3D mesh")->required();
   auto *t_opt = slice_cmd->add_option("--t", slice_value, "Shorthand for --axis t --value VALUE");
-  slice_cmd->add_option("--axis", slice_axis, "x, y, z or t (default t)")
+  slice_cmd->add_option("--axis", slice_axis, "x, y, z or t (default t: the last coordinate, z of a 3D mesh)")
       ->check(CLI::IsMember({"x", "y", "z", "t"}));
   slice_cmd->add_option("--value", slice_value, "Where the hyperplane cuts the axis")->excludes(t_opt);
   slice_cmd->add_option("--output,-o", slice_out, "Output 3D mesh (.vtu or .msh)")->required();
   slice_cmd->add_flag("--force,-f", slice_force, "Overwrite an existing file");
 
   std::string ex_in, ex_out, ex_slices, ex_method = "delaunay";
-  bool ex_force = false;
+  bool ex_force = false, ex_barycentric = false;
   auto *extrude_cmd = app.add_subcommand(
-      "extrude", "Extrude a 3D tetrahedral mesh over time slices into a 4D pentatope mesh.");
+      "extrude", "Extrude a 3D tetrahedral mesh over time slices into a 4D pentatope mesh (or, with "
+                 "--method colouring, a 2D triangle mesh into a 3D tetrahedral one).");
   extrude_cmd->footer("Example: bisect extrude cube.vtu --slices 0,0.5,1 -o spacetime.vtu\n"
                       "         bisect extrude cube.vtu --slices 0:1:4 -o spacetime.vtu   "
                       "(4 slabs between 0 and 1)\n"
                       "--method delaunay triangulates the 4D points with Qhull: the 3D mesh must be "
-                      "convex (a non-convex one is rejected).");
-  extrude_cmd->add_option("input", ex_in, "3D mesh (.vtu or .msh)")->required();
+                      "convex (a non-convex one is rejected).\n"
+                      "--method colouring cuts every prism by a vertex colouring (seed 001): 4 "
+                      "pentatopes per tet and slab (3 tets per triangle), consistently tagged "
+                      "(marking sorted in colour order), any domain shape. The colouring is the "
+                      "point array 'colour' when present, else found by propagation (see bisect "
+                      "colour); --barycentric subdivides first, which always has one.\n"
+                      "         bisect extrude cube.vtu --slices 0:1:4 --method colouring -o st.vtu");
+  extrude_cmd->add_option("input", ex_in, "3D mesh (.vtu or .msh); 2D too with --method colouring")->required();
   extrude_cmd->add_option("--slices", ex_slices, "T0,T1,... or START:STOP:COUNT (COUNT slabs)")
       ->required();
-  extrude_cmd->add_option("--method", ex_method, "delaunay (the only one so far)")
-      ->check(CLI::IsMember({"delaunay"}));
-  extrude_cmd->add_option("--output,-o", ex_out, "Output 4D mesh (.vtu)")->required();
+  extrude_cmd->add_option("--method", ex_method, "delaunay (default; 3D convex meshes) or colouring")
+      ->check(CLI::IsMember({"delaunay", "colouring"}));
+  extrude_cmd->add_flag("--barycentric", ex_barycentric,
+                        "--method colouring: extrude the barycentric subdivision (always colourable)");
+  extrude_cmd->add_option("--output,-o", ex_out, "Output 4D mesh (.vtu), or 3D mesh (.vtu or .msh) from a 2D one")->required();
   extrude_cmd->add_flag("--force,-f", ex_force, "Overwrite an existing file");
+  bool ex_hull = false;
+  extrude_cmd->add_flag("--hull", ex_hull,
+                        "delaunay: accept a non-convex 3D mesh and fill the convex hull of its "
+                        "points (as seed 000 §5.2 does for a faceted sphere octant)");
+
+  std::string colour_in, colour_out;
+  bool colour_barycentric = false, colour_recompute = false, colour_force = false;
+  auto *colour_cmd = app.add_subcommand(
+      "colour", "Check or find a vertex colouring of a 2D/3D mesh (every cell's vertices "
+                "different colours 0..dim), as extrude --method colouring needs.");
+  colour_cmd->footer("Example: bisect colour cube.vtu -o cube-coloured.vtu\n"
+                     "         bisect colour ball.msh --barycentric -o ball-bary.vtu\n"
+                     "Checks the point array 'colour' when present; otherwise propagates colours "
+                     "across facets, which either finds a colouring or proves there is none (exit 1 "
+                     "with the reason, e.g. an interior edge in an odd number of tets). Colours 0, "
+                     "1, 2, 3 are seed 001's labels A, B, C, D.");
+  colour_cmd->add_option("input", colour_in, "2D or 3D mesh (.vtu or .msh)")->required();
+  colour_cmd->add_flag("--barycentric", colour_barycentric,
+                       "Subdivide barycentrically (6 triangles / 24 tets per cell), coloured by vertex kind");
+  colour_cmd->add_flag("--recompute", colour_recompute, "Ignore a 'colour' array in the input");
+  colour_cmd->add_option("--output,-o", colour_out, "Write the mesh with the point array 'colour'");
+  colour_cmd->add_flag("--force,-f", colour_force, "Overwrite an existing file");
 
   std::string info_in;
   auto *info_cmd = app.add_subcommand("info", "Dimension, counts, bounding box, volume, quality.");
@@ -581,11 +797,17 @@ int main(int argc, char **argv) {
   std::uint64_t g_seed = 1;
   bool g_force = false;
   auto *gen_simplex = gen_cmd->add_subcommand("simplex", "One simplex.");
-  gen_simplex->footer("Example: bisect generate simplex --dim 3 --shape random --seed 7 -o tet.vtu");
+  gen_simplex->footer("Examples: bisect generate simplex --dim 3 --shape random --seed 7 -o tet.vtu\n"
+                      "          bisect generate simplex --dim 4 --type A_PO -o apo.vtu");
   gen_simplex->add_option("--dim,-d", g_dim, "2, 3 or 4")->check(CLI::Range(2, 4));
   gen_simplex->add_option("--shape", g_shape, "equilateral, cartesian or random")
       ->check(CLI::IsMember({"equilateral", "cartesian", "random"}));
   gen_simplex->add_option("--seed", g_seed, "Seed for --shape random");
+  std::string g_type;
+  gen_simplex->add_option("--type", g_type,
+                          "Force the marks to a type (seed 000 §3.2): for --dim 4 e.g. P_PP, P_AA, "
+                          "A_PO (level-1 relation, then the two level-2 relations); for --dim 3 "
+                          "P, A, O or M. Stored as an explicit edge order in the file");
   gen_simplex->add_option("--output,-o", g_out, "Output mesh")->required();
   gen_simplex->add_flag("--force,-f", g_force, "Overwrite an existing file");
   int k_cells = 2;
@@ -596,6 +818,10 @@ int main(int argc, char **argv) {
   gen_kuhn->add_option("--cells,-k", k_cells, "Cubes per side")->check(CLI::Range(1, 1000));
   gen_kuhn->add_option("--lo", k_lo, "Lower corner coordinate (default 0)");
   gen_kuhn->add_option("--hi", k_hi, "Upper corner coordinate (default 1)");
+  std::vector<double> k_box;
+  gen_kuhn->add_option("--box", k_box, "LO,HI: the cube [LO,HI]^dim (same as --lo LO --hi HI)")
+      ->delimiter(',')
+      ->expected(2);
   gen_kuhn->add_option("--output,-o", g_out, "Output mesh")->required();
   gen_kuhn->add_flag("--force,-f", g_force, "Overwrite an existing file");
 
@@ -615,9 +841,13 @@ int main(int argc, char **argv) {
   try {
     if (*refine_cmd) return run_refine(ra);
     if (*info_cmd) return run_info(info_in);
+    if (*colour_cmd) return run_colour(colour_in, colour_barycentric, colour_recompute, colour_out, colour_force);
     if (*extrude_cmd) {
       refuse_overwrite(ex_out, ex_in, ex_force);
       std::vector<double> ts = parse_slices(ex_slices);
+      if (ex_method == "colouring" && ex_hull) throw UsageError("--hull needs --method delaunay");
+      if (ex_method == "colouring") return run_extrude_colouring(ex_in, ts, ex_barycentric, ex_out);
+      if (ex_barycentric) throw UsageError("--barycentric needs --method colouring");
       Mesh mesh = read_mesh(ex_in);
       prepare_input(mesh, ex_in);
       if (mesh.dim != 3)
@@ -625,7 +855,7 @@ int main(int argc, char **argv) {
                                     std::to_string(mesh.dim) + "D");
       Mesh m4;
       try {
-        m4 = extrude_delaunay(mesh, ts);
+        m4 = extrude_delaunay(mesh, ts, ex_hull);
       } catch (const InputError &e) {
         throw InputError(ex_in, e.what());
       }
@@ -635,9 +865,10 @@ int main(int argc, char **argv) {
       refuse_overwrite(slice_out, slice_in, slice_force);
       Mesh mesh = read_mesh(slice_in);
       prepare_input(mesh, slice_in);
-      if (mesh.dim != 4)
-        throw InputError(slice_in, "slice needs a 4D mesh, this one is " + std::to_string(mesh.dim) + "D");
-      int axis = int(std::string("xyzt").find(slice_axis[0]));
+      if (mesh.dim < 3)
+        throw InputError(slice_in, "slice needs a 3D or 4D mesh, this one is 2D");
+      int axis = slice_axis == "t" ? mesh.dim - 1 : int(std::string("xyz").find(slice_axis[0]));
+      if (axis >= mesh.dim) throw UsageError("slice: a 3D mesh has no axis " + slice_axis);
       write_slice(mesh, axis, slice_value, slice_out, false);
       return kExitOk;
     }
@@ -647,9 +878,18 @@ int main(int argc, char **argv) {
       SimplexShape s = g_shape == "cartesian" ? SimplexShape::Cartesian
                        : g_shape == "random"  ? SimplexShape::Random
                                               : SimplexShape::Equilateral;
-      return write_generated(generate_simplex(g_dim, s, g_seed), g_out, g_force);
+      Mesh simplex = generate_simplex(g_dim, s, g_seed);
+      if (!g_type.empty()) {
+        try {
+          force_type(simplex, g_type);
+        } catch (const std::invalid_argument &e) {
+          throw UsageError(std::string("generate simplex --type: ") + e.what());
+        }
+      }
+      return write_generated(std::move(simplex), g_out, g_force);
     }
     if (*gen_kuhn) {
+      if (k_box.size() == 2) k_lo = k_box[0], k_hi = k_box[1];
       if (!(k_lo < k_hi)) throw UsageError("generate kuhn: --lo must be below --hi");
       return write_generated(generate_kuhn(g_dim, k_cells, k_lo, k_hi), g_out, g_force);
     }
