@@ -17,6 +17,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -52,8 +53,12 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 
 std::string with_commas(std::size_t n) {
-  std::string s = std::to_string(n);
-  for (int i = int(s.size()) - 3; i > 0; i -= 3) s.insert(std::size_t(i), ",");
+  const std::string digits = std::to_string(n);
+  std::string s;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) s += ',';
+    s += digits[i];
+  }
   return s;
 }
 
@@ -593,10 +598,16 @@ std::vector<std::uint8_t> colouring_of(Mesh &mesh, const std::string &path, bool
     return *given;
   }
   Colouring c = colour_mesh(mesh);
+  const bool partial = !recompute && std::any_of(mesh.point_data.begin(), mesh.point_data.end(),
+                                                 [](const DataArray &a) { return a.name == kColourArray; });
+  const std::string note = partial ? std::string(" (the point array ") + kColourArray +
+                                         " leaves vertices made by refinement uncoloured (-1), so it was ignored)"
+                                   : "";
   if (!c.ok)
-    throw InputError(path, "no proper " + colours + ": " + c.why + "; --barycentric subdivides the mesh into one that has");
+    throw InputError(path, "no proper " + colours + ": " + c.why + note +
+                               "; --barycentric subdivides the mesh into one that has");
   how = colours + " found by propagation (" + std::to_string(c.components) +
-        (c.components == 1 ? " component)" : " components)");
+        (c.components == 1 ? " component)" : " components)") + note;
   return std::move(c.colour);
 }
 

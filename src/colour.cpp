@@ -425,6 +425,9 @@ std::optional<std::vector<std::uint8_t>> colour_array(const Mesh &mesh) {
       throw InputError("", std::string("point array ") + kColourArray +
                                " must have 1 component, not " + std::to_string(a.components));
     std::vector<std::uint8_t> colour(mesh.num_vertices());
+    for (std::size_t v = 0; v < colour.size() && v < a.values.size(); ++v)
+      if (a.values[v] == kNoLabel)
+        return std::nullopt; // vertices made by refinement after colouring: no colouring
     for (std::size_t v = 0; v < colour.size() && v < a.values.size(); ++v) {
       double c = a.values[v];
       if (!(c >= 0 && c <= mesh.dim && c == std::floor(c)))

@@ -47,6 +47,13 @@ struct DataArray {
   std::vector<double> values;
 };
 
+// Point arrays that label vertices rather than sample a field: `colour` (the
+// vertex colouring of bisect colour / extrude) and `slice` (the time slice of
+// an extruded vertex). Averaging labels is meaningless, so a vertex made by
+// bisection or by slicing between two vertices gets kNoLabel instead.
+inline constexpr double kNoLabel = -1;
+inline bool is_label_array(const std::string &name) { return name == "colour" || name == "slice"; }
+
 struct Mesh {
   int dim = 0;                   // 2, 3 or 4: space dimension == cell dimension
   std::vector<double> coords;    // dim values per vertex

@@ -273,7 +273,8 @@ private:
     m_.cells.shrink_to_fit();
   }
 
-  // Children inherit cell data; point data is interpolated at midpoints.
+  // Children inherit cell data; point data is interpolated at midpoints,
+  // except label arrays (is_label_array), which new vertices get as kNoLabel.
   void finish() {
     for (DataArray &a : m_.cell_data) {
       const std::size_t k = a.components;
@@ -284,6 +285,10 @@ private:
     }
     for (DataArray &a : m_.point_data) {
       const std::size_t k = a.components;
+      if (is_label_array(a.name)) {
+        a.values.resize(m_.num_vertices() * k, kNoLabel);
+        continue;
+      }
       a.values.resize(m_.num_vertices() * k);
       for (std::size_t i = 0; i < parents_.size() / 2; ++i)
         for (std::size_t j = 0; j < k; ++j)

@@ -146,7 +146,7 @@ std::map<std::array<VertexId, 4>, CellId> in_plane_owners(const Mesh &mesh, int 
     int n = 0;
     for (int i = 0; i < p.n; ++i)
       if (p.side[i] == 0) facet[n++] = p.ids[i];
-    std::sort(facet.begin(), facet.begin() + n);
+    std::sort(facet.begin(), facet.end()); // unused entries are kNoVertex and stay last
     const bool above = count_side(p, 1) == 1;
     auto it = owner.find(facet);
     if (it == owner.end() || (above && !owner_above[facet])) {
@@ -176,7 +176,7 @@ std::vector<Tet> cut_cell(const Mesh &mesh, CellId c, int axis, double value,
     std::array<VertexId, 4> facet{kNoVertex, kNoVertex, kNoVertex, kNoVertex};
     for (int i = 0; i <= k; ++i)
       facet[i] = key_first(pts[i]);
-    std::sort(facet.begin(), facet.begin() + k + 1);
+    std::sort(facet.begin(), facet.end()); // unused entries are kNoVertex and stay last
     if (owners.at(facet) == c) {
       Tet t{};
       std::copy(pts.begin(), pts.end(), t.begin());
@@ -210,10 +210,14 @@ struct VertexMaker {
       if (d != axis) out.coords.push_back(a == b ? pa[d] : pa[d] + lambda * (pb[d] - pa[d]));
     for (std::size_t n = 0; n < in.point_data.size(); ++n) {
       const DataArray &src = in.point_data[n];
+      const bool label = is_label_array(src.name); // kept at a vertex, else kNoLabel
       for (int j = 0; j < src.components; ++j) {
         const double va = src.values[std::size_t(a) * src.components + j];
         const double vb = src.values[std::size_t(b) * src.components + j];
-        out.point_data[n].values.push_back(a == b ? va : (1 - lambda) * va + lambda * vb);
+        out.point_data[n].values.push_back(a == b || lambda == 0 ? va
+                                           : lambda == 1        ? vb
+                                           : label              ? kNoLabel
+                                                                : (1 - lambda) * va + lambda * vb);
       }
     }
   }

@@ -10,10 +10,12 @@
 #include "numbering.hpp"
 #include "refine.hpp"
 #include "region.hpp"
+#include "slice.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -325,6 +327,52 @@ TEST_CASE("extrusion by colour: the state survives a .vtu round trip and refine 
     refine(r, select_cells(r, *region));
   }
   REQUIRE(r.cells == m.cells);
+}
+
+TEST_CASE("label arrays (colour, slice) are not averaged: refinement and slicing mark new vertices -1",
+          "[extrude][colour][4d][slice]") {
+  Mesh in = testing::renumbered(generate_kuhn(3, 2), 9);
+  Colouring c = colour_mesh(in);
+  REQUIRE(c.ok);
+  set_colour_array(in, c.colour);
+  DataArray x{"x", 1, {}}; // a field: still interpolated
+  for (std::size_t v = 0; v < in.num_vertices(); ++v)
+    x.values.push_back(in.point(VertexId(v))[0]);
+  in.point_data.push_back(x);
+  Mesh m = extrude_coloured(in, c.colour, {0, 0.5, 1});
+  const std::size_t nv0 = m.num_vertices();
+  auto array = [](const Mesh &mesh, const std::string &name) -> const DataArray & {
+    for (const DataArray &a : mesh.point_data)
+      if (a.name == name) return a;
+    FAIL("no point array " << name);
+    throw;
+  };
+  const std::vector<double> colour0 = array(m, "colour").values, slice0 = array(m, "slice").values;
+  auto region = moving_sphere(4);
+  for (int it = 0; it < 3; ++it)
+    refine(m, select_cells(m, *region));
+  REQUIRE(m.num_vertices() > nv0);
+  for (const char *name : {"colour", "slice"}) {
+    const DataArray &a = array(m, name);
+    REQUIRE(a.values.size() == m.num_vertices());
+    for (std::size_t v = 0; v < m.num_vertices(); ++v)
+      REQUIRE(a.values[v] == (v < nv0 ? (name[0] == 'c' ? colour0 : slice0)[v] : kNoLabel));
+  }
+  const DataArray &fx = array(m, "x");
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    REQUIRE(fx.values[v] == Approx(m.point(VertexId(v))[0]).margin(1e-12));
+  // The colouring of a refined mesh is gone, not wrong.
+  REQUIRE_FALSE(colour_array(m));
+  // A section between slices: cut points inside edges get -1, points at
+  // vertices keep their labels.
+  Mesh s = slice_mesh(m, 3, 0.3);
+  const DataArray &sl = array(s, "slice"), &sx = array(s, "x");
+  REQUIRE(std::all_of(sl.values.begin(), sl.values.end(), [](double v) { return v == kNoLabel; }));
+  for (std::size_t v = 0; v < s.num_vertices(); ++v)
+    REQUIRE(sx.values[v] == Approx(s.point(VertexId(v))[0]).margin(1e-12));
+  Mesh s0 = slice_mesh(m, 3, 0.5); // the middle slice: every cut point is a vertex of slice 1
+  const DataArray &sl0 = array(s0, "slice");
+  REQUIRE(std::count(sl0.values.begin(), sl0.values.end(), 1.0) > 0);
 }
 
 TEST_CASE("extrusion by colour: local refinement stays conforming after every iteration (3D+t)",
