@@ -565,8 +565,8 @@ Mesh read_colourable(const std::string &path, const char *command) {
 // The colouring of `mesh`: with `barycentric` the mesh is replaced by its
 // barycentric subdivision, coloured by vertex kind; otherwise its point array
 // `colour` when present (it must be proper) unless `recompute`, else found by
-// propagation. `how` says which. Throws InputError naming `path` when there
-// is none.
+// propagation and stored as the point array `colour`. `how` says which.
+// Throws InputError naming `path` when there is none.
 std::vector<std::uint8_t> colouring_of(Mesh &mesh, const std::string &path, bool barycentric,
                                        bool recompute, std::string &how) {
   const std::string colours = std::to_string(mesh.dim + 1) + "-colouring";
@@ -608,6 +608,9 @@ std::vector<std::uint8_t> colouring_of(Mesh &mesh, const std::string &path, bool
                                "; --barycentric subdivides the mesh into one that has");
   how = colours + " found by propagation (" + std::to_string(c.components) +
         (c.components == 1 ? " component)" : " components)") + note;
+  // The mesh carries the colouring used (replacing a stale array), so what
+  // extrude copies to every slice and colour -o writes are that colouring.
+  set_colour_array(mesh, c.colour);
   return std::move(c.colour);
 }
 

@@ -69,4 +69,16 @@ expect_exit 0 "$BISECT" generate kuhn --dim 4 --cells 1 -o h.vtu
 expect_exit 1 "$BISECT" colour h.vtu
 one_line_naming "h.vtu"
 [[ ! -e bad.vtu && ! -e bad.msh ]] || fail "output left behind"
+# A coloured mesh refined: its colour array is -1 at the new vertices, so it
+# is ignored and the mesh recoloured, and the extruded mesh carries the
+# colouring used (its t = 0 section reads back as a proper given colouring).
+echo '{"type":"box","min":[-1,-1,-1],"max":[2,2,2]}' >all.json
+expect_exit 0 "$BISECT" refine cube-coloured.vtu --region all.json -n 3 --marking sorted -q -o cube-r.vtu
+expect_exit 0 "$BISECT" colour cube-r.vtu
+grep -q "found by propagation.*uncoloured (-1), so it was ignored" "$WORK/out" || fail "stale colour array not reported"
+expect_exit 0 "$BISECT" extrude cube-r.vtu --slices 0,1 --method colouring -o cube-r4.vtu
+expect_exit 0 "$BISECT" slice cube-r4.vtu --t 0 -o cube-r4-t0.vtu
+expect_exit 0 "$BISECT" colour cube-r4-t0.vtu
+grep -q "given by the point array colour" "$WORK/out" || fail "extruded mesh lacks the colouring it was cut by"
+
 echo "colour: ok"
