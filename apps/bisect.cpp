@@ -8,6 +8,7 @@
 #include "io.hpp"
 #include "mark.hpp"
 #include "measure.hpp"
+#include "output.hpp"
 #include "refine.hpp"
 #include "region.hpp"
 #include "slice.hpp"
@@ -22,6 +23,8 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cerrno>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -42,7 +45,32 @@ const char *kExitCodesHelp = "Exit codes: 0 success; 1 usage or input error (one
                              "and conforming; 130 interrupted (no output written).";
 
 std::atomic<bool> g_interrupted{false};
-extern "C" void on_signal(int) { g_interrupted = true; }
+
+// SIGINT, SIGTERM, SIGHUP: before the outputs are committed nothing of the
+// run's result exists but temporary files, so they are removed and the
+// process ends at once, whatever it was doing (reading, refining, writing).
+// After the commit the run is complete and the signal is only noted.
+extern "C" void on_signal(int) {
+  if (outputs_committed()) {
+    g_interrupted = true;
+    return;
+  }
+  remove_pending_outputs();
+  static const char msg[] = "bisect: interrupted; no output written\n";
+  (void)!::write(STDERR_FILENO, msg, sizeof msg - 1);
+  ::_exit(130);
+}
+
+void install_signal_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
+  // A file size limit or a reader that went away makes write() fail with
+  // EFBIG or EPIPE, reported as such, instead of killing the process.
+  std::signal(SIGXFSZ, SIG_IGN);
+  std::signal(SIGPIPE, SIG_IGN);
+}
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -77,57 +105,38 @@ Mesh load_mesh(const std::string &path, std::optional<Marking> requested, bool q
   return mesh;
 }
 
-bool same_file(const std::string &a, const std::string &b) {
-  std::error_code ec;
-  return fs::exists(b, ec) && fs::equivalent(a, b, ec);
-}
-
-// Fails early when `path` could not be written: its directory is missing or
-// not writable, or the path is a directory.
-void require_writable(const std::string &path) {
-  fs::path p(path);
-  fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw UsageError(path + ": cannot write: directory " + dir.string() + " does not exist");
-  if (fs::is_directory(p, ec)) throw UsageError(path + ": cannot write: it is a directory");
-  if (::access(dir.c_str(), W_OK) != 0)
-    throw UsageError(path + ": cannot write: directory " + dir.string() + " is not writable");
-}
-
-void refuse_overwrite(const std::string &out, const std::string &input, bool force) {
-  require_writable(out);
-  if (same_file(input, out))
-    throw UsageError(out + ": refusing to overwrite the input mesh; choose another -o");
-  std::error_code ec;
-  if (!force && fs::exists(out, ec))
-    throw UsageError(out + ": already exists (use --force to overwrite)");
-}
-
-// Writes `text` to path through a temporary file renamed when complete.
-void write_text_file(const std::string &path, const std::string &text) {
-  fs::path p(path);
-  fs::path tmp = p.parent_path() / ("." + p.filename().string() + ".tmp");
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    f << text;
-    if (!f.flush()) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw InputError(path, "cannot write");
+// Writes `text` into `file` (an OutputSet's file for output `name`).
+void write_text_file(const std::string &file, const std::string &name, const std::string &text) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) throw InputError(name, "cannot write: " + write_failure(errno));
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int err = n < 0 ? errno : EIO;
+      ::close(fd);
+      throw InputError(name, "cannot write: " + write_failure(err));
     }
+    done += std::size_t(n);
   }
-  std::error_code ec;
-  fs::rename(tmp, p, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw InputError(path, "cannot write: " + ec.message());
-  }
+  if (::close(fd) != 0) throw InputError(name, "cannot write: " + write_failure(errno));
 }
 
-void write_output_mesh(const std::string &path, Mesh &mesh) {
+// One output file, checked before any work (see output.hpp for the rules).
+void check_extension(const std::string &out) {
+  const std::string ext = [&] {
+    std::string e = fs::path(out).extension().string();
+    for (char &c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return e;
+  }();
+  if (ext != ".vtu" && ext != ".msh") throw UsageError(out + ": output must end in .vtu or .msh");
+}
+
+// Writes `mesh` with its bisection state into output `h` of `outputs`.
+void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const std::string &format = {}) {
   encode_state(mesh);
-  write_mesh(path, mesh);
+  write_mesh_file(outputs.file(h), outputs.name(h), mesh, format);
 }
 
 // ---------------------------------------------------------------- refine ---
@@ -163,7 +172,7 @@ std::string memory_shortfall(const Mesh &mesh, std::size_t selected, double max_
 }
 
 struct RefineArgs {
-  std::string input, region, output, csv;
+  std::string input, region, output, csv, format;
   int iterations = 1;
   std::string marking;
   std::int64_t max_elements = 0;
@@ -180,15 +189,18 @@ std::string slice_path(const std::string &output, const char *axis, double value
   return (p.parent_path() / name.str()).string();
 }
 
-void write_slice(const Mesh &mesh, int axis, double value, const std::string &path, bool quiet) {
+// Writes the section of `mesh` at coordinate `axis` = `value` into output
+// `h`; returns the line to print once the outputs are committed.
+std::string write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h) {
   Mesh s = slice_mesh(mesh, axis, value);
   // The 4D bisection state means nothing on a 3D section.
   std::erase_if(s.cell_data, [](const DataArray &d) { return d.name.rfind("bisect:", 0) == 0; });
-  write_mesh(path, s);
-  if (!quiet)
-    std::cerr << "bisect: wrote " << path << " (" << with_commas(s.num_cells())
-              << (s.dim == 3 ? " tetrahedra" : " triangles") << ": the section "
-              << (axis == mesh.dim - 1 ? 't' : "xyz"[axis]) << " = " << value << ")\n";
+  write_mesh_file(outputs.file(h), outputs.name(h), s);
+  std::ostringstream line;
+  line << "bisect: wrote " << outputs.name(h) << " (" << with_commas(s.num_cells())
+       << (s.dim == 3 ? " tetrahedra" : " triangles") << ": the section "
+       << (axis == mesh.dim - 1 ? 't' : "xyz"[axis]) << " = " << value << ")\n";
+  return line.str();
 }
 
 std::string default_output(const std::string &input) {
@@ -268,14 +280,23 @@ int run_refine(const RefineArgs &a) {
   std::optional<Marking> marking;
   if (!a.marking.empty()) marking = parse_marking(a.marking);
   std::string out = a.output.empty() ? default_output(a.input) : a.output;
-  std::string csv = a.csv.empty() ? default_csv(out) : a.csv;
-  refuse_overwrite(out, a.input, a.force);
-  refuse_overwrite(csv, a.input, a.force);
-  for (double t : a.slices) refuse_overwrite(slice_path(out, "t", t), a.input, a.force);
-  if (fs::path(out).extension() != ".vtu" && fs::path(out).extension() != ".msh")
-    throw UsageError(out + ": output must end in .vtu or .msh");
+  // -o -: the mesh goes to standard output (then no CSV unless asked for).
+  if (out == "-") {
+    if (a.format.empty()) throw UsageError("-o -: give the format with --format vtu or --format msh");
+    if (a.json) throw UsageError("--json and -o - both write to standard output; choose one");
+    out = "/dev/stdout";
+  }
+  std::string csv = !a.csv.empty() ? a.csv : a.output == "-" ? "none" : default_csv(out);
+  if (a.format.empty()) check_extension(out);
+  // Every output is checked before any work and written as one transaction.
+  OutputSet outputs({a.input, a.region}, a.force);
+  const int h_mesh = outputs.add(out);
+  const int h_csv = csv == "none" ? -1 : outputs.add(csv);
+  std::vector<int> h_slices;
+  for (double t : a.slices) h_slices.push_back(outputs.add(slice_path(out, "t", t)));
 
   Mesh mesh = load_mesh(a.input, marking, a.quiet);
+  check_output_format(out, mesh.dim, a.format);
   if (!a.slices.empty() && mesh.dim < 3)
     throw UsageError("--slices needs a 3D (2D+t) or 4D mesh; " + a.input + " is 2D");
   auto region = read_region(a.region, mesh.dim);
@@ -367,21 +388,19 @@ int run_refine(const RefineArgs &a) {
     std::cerr << "bisect: interrupted; no output written\n";
     return kExitInterrupted;
   }
-  write_text_file(csv, rows.str());
-  try {
-    write_output_mesh(out, mesh);
-  } catch (...) {
-    std::error_code ec;
-    fs::remove(csv, ec); // never half a result
-    throw;
-  }
-  for (double t : a.slices) write_slice(mesh, mesh.dim - 1, t, slice_path(out, "t", t), a.quiet);
+  if (h_csv >= 0) write_text_file(outputs.file(h_csv), csv, rows.str());
+  write_output_mesh(outputs, h_mesh, mesh, a.format);
+  std::string slice_lines;
+  for (std::size_t i = 0; i < a.slices.size(); ++i)
+    slice_lines += write_slice(mesh, mesh.dim - 1, a.slices[i], outputs, h_slices[i]);
+  outputs.commit();
+  if (!a.quiet) std::cerr << slice_lines;
   double total = seconds_since(t_start);
   if (a.json) {
     nlohmann::json j;
     j["input"] = a.input;
     j["output"] = out;
-    j["quality_csv"] = csv;
+    j["quality_csv"] = h_csv >= 0 ? nlohmann::json(csv) : nlohmann::json(nullptr);
     j["dim"] = mesh.dim;
     j["marking"] = marking_name(mesh.marking);
     j["iterations"] = done;
@@ -398,8 +417,8 @@ int run_refine(const RefineArgs &a) {
     std::cout << j.dump() << std::endl;
   }
   if (!a.quiet)
-    std::cerr << "bisect: wrote " << out << " (" << with_commas(mesh.num_cells()) << " cells) and "
-              << csv << " in " << std::fixed << std::setprecision(2) << total << " s\n";
+    std::cerr << "bisect: wrote " << out << " (" << with_commas(mesh.num_cells()) << " cells)"
+              << (h_csv >= 0 ? " and " + csv : std::string()) << " in " << std::fixed << std::setprecision(2) << total << " s\n";
   return limit_reached ? kExitLimit : kExitOk;
 }
 
@@ -540,11 +559,16 @@ int run_quality(const std::string &path, bool classes, int bins) {
 
 // -------------------------------------------------------------- generate ---
 
-int write_generated(Mesh mesh, const std::string &out, bool force) {
-  std::error_code ec;
-  if (!force && fs::exists(out, ec)) throw UsageError(out + ": already exists (use --force to overwrite)");
+// Writes a made mesh to `out` (an OutputSet of one; `inputs` may not be it).
+int write_generated(Mesh mesh, const std::string &out, bool force,
+                    std::vector<std::string> inputs = {}) {
+  check_extension(out);
+  OutputSet outputs(std::move(inputs), force);
+  const int h = outputs.add(out);
+  check_output_format(out, mesh.dim);
   if (mesh.marked()) encode_state(mesh);
-  write_mesh(out, mesh);
+  write_mesh_file(outputs.file(h), out, mesh);
+  outputs.commit();
   std::cout << "wrote " << out << " (" << mesh.num_cells() << " cells, " << mesh.num_vertices()
             << " vertices)\n";
   return kExitOk;
@@ -615,10 +639,11 @@ std::vector<std::uint8_t> colouring_of(Mesh &mesh, const std::string &path, bool
 }
 
 int run_colour(const std::string &in, bool barycentric, bool recompute, const std::string &out, bool force) {
+  OutputSet outputs({in}, force);
+  int h = -1;
   if (!out.empty()) {
-    refuse_overwrite(out, in, force);
-    if (fs::path(out).extension() != ".vtu" && fs::path(out).extension() != ".msh")
-      throw UsageError(out + ": output must end in .vtu or .msh");
+    check_extension(out);
+    h = outputs.add(out);
   }
   Mesh mesh = read_colourable(in, "colour");
   std::string how;
@@ -633,7 +658,8 @@ int run_colour(const std::string &in, bool barycentric, bool recompute, const st
     std::cout << "colour " << k << " (" << "ABCD"[k] << "): " << count[std::size_t(k)] << " vertices\n";
   if (!out.empty()) {
     set_colour_array(mesh, colour);
-    write_mesh(out, mesh);
+    write_mesh_file(outputs.file(h), out, mesh);
+    outputs.commit();
     std::cout << "wrote " << out << " (" << mesh.num_cells() << " cells, " << mesh.num_vertices()
               << " vertices, point array " << kColourArray << ")\n";
   }
@@ -642,11 +668,12 @@ int run_colour(const std::string &in, bool barycentric, bool recompute, const st
 
 // extrude --method colouring: prisms cut and tagged by the colouring (seed 001).
 int run_extrude_colouring(const std::string &in, const std::vector<double> &slices, bool barycentric,
-                          const std::string &out) {
-  std::string ext = fs::path(out).extension().string();
-  if (ext != ".vtu" && ext != ".msh") throw UsageError(out + ": output must end in .vtu or .msh");
+                          const std::string &out, bool force) {
+  check_extension(out);
+  OutputSet outputs({in}, force);
+  const int h = outputs.add(out);
   Mesh mesh = read_colourable(in, "extrude --method colouring");
-  if (mesh.dim == 3 && ext != ".vtu") throw UsageError(out + ": a 4D mesh can only be written as .vtu");
+  check_output_format(out, mesh.dim + 1);
   std::string how;
   std::vector<std::uint8_t> colour = colouring_of(mesh, in, barycentric, false, how);
   Mesh st;
@@ -655,7 +682,8 @@ int run_extrude_colouring(const std::string &in, const std::vector<double> &slic
   } catch (const InputError &e) {
     throw InputError(in, e.what());
   }
-  write_output_mesh(out, st);
+  write_output_mesh(outputs, h, st);
+  outputs.commit();
   std::cout << "wrote " << out << " (" << st.num_cells() << (st.dim == 4 ? " pentatopes, " : " tetrahedra, ")
             << st.num_vertices() << " vertices; tagged by the " << how << ")\n";
   return kExitOk;
@@ -664,8 +692,7 @@ int run_extrude_colouring(const std::string &in, const std::vector<double> &slic
 } // namespace
 
 int main(int argc, char **argv) {
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  install_signal_handlers();
 
   CLI::App app{"bisect: conformal local refinement of triangle, tetrahedral and 4D simplicial "
                "meshes by edge bisection (Maubach / Arnold-Mukherjee-Pouly marking, seeds "
@@ -690,9 +717,14 @@ int main(int argc, char **argv) {
   refine_cmd->add_option("--iterations,-n", ra.iterations, "Refinement iterations (default 1)")
       ->check(CLI::Range(0, 10000));
   refine_cmd->add_option("--output,-o", ra.output,
-                         "Output mesh (.vtu or .msh); default <input stem>.refined.vtu here");
+                         "Output mesh (.vtu or .msh); default <input stem>.refined.vtu here; "
+                         "- for standard output (with --format)");
+  refine_cmd->add_option("--format", ra.format,
+                         "Output format when the output's name has no .vtu/.msh extension "
+                         "(e.g. -o /dev/stdout --format vtu)")
+      ->check(CLI::IsMember({"vtu", "msh"}));
   refine_cmd->add_option("--quality-csv", ra.csv,
-                         "Per-iteration quality CSV; default <output stem>.quality.csv");
+                         "Per-iteration quality CSV; default <output stem>.quality.csv; none: no CSV");
   refine_cmd->add_option("--marking,-m", ra.marking,
                          "Global edge order: index (default; every tet unflagged planar), "
                          "longest (longest edge first), sorted ((x0<...<xn)_n)")
@@ -857,11 +889,16 @@ int main(int argc, char **argv) {
     if (*info_cmd) return run_info(info_in);
     if (*colour_cmd) return run_colour(colour_in, colour_barycentric, colour_recompute, colour_out, colour_force);
     if (*extrude_cmd) {
-      refuse_overwrite(ex_out, ex_in, ex_force);
       std::vector<double> ts = parse_slices(ex_slices);
       if (ex_method == "colouring" && ex_hull) throw UsageError("--hull needs --method delaunay");
-      if (ex_method == "colouring") return run_extrude_colouring(ex_in, ts, ex_barycentric, ex_out);
+      if (ex_method == "colouring") return run_extrude_colouring(ex_in, ts, ex_barycentric, ex_out, ex_force);
       if (ex_barycentric) throw UsageError("--barycentric needs --method colouring");
+      check_extension(ex_out);
+      {
+        OutputSet probe({ex_in}, ex_force); // refuse a bad output before the work
+        probe.add(ex_out);
+        check_output_format(ex_out, 4);
+      }
       Mesh mesh = read_mesh(ex_in);
       prepare_input(mesh, ex_in);
       if (mesh.dim != 3)
@@ -873,17 +910,21 @@ int main(int argc, char **argv) {
       } catch (const InputError &e) {
         throw InputError(ex_in, e.what());
       }
-      return write_generated(std::move(m4), ex_out, true);
+      return write_generated(std::move(m4), ex_out, ex_force, {ex_in});
     }
     if (*slice_cmd) {
-      refuse_overwrite(slice_out, slice_in, slice_force);
+      check_extension(slice_out);
+      OutputSet outputs({slice_in}, slice_force);
+      const int h = outputs.add(slice_out);
       Mesh mesh = read_mesh(slice_in);
       prepare_input(mesh, slice_in);
       if (mesh.dim < 3)
         throw InputError(slice_in, "slice needs a 3D or 4D mesh, this one is 2D");
       int axis = slice_axis == "t" ? mesh.dim - 1 : int(std::string("xyz").find(slice_axis[0]));
       if (axis >= mesh.dim) throw UsageError("slice: a 3D mesh has no axis " + slice_axis);
-      write_slice(mesh, axis, slice_value, slice_out, false);
+      const std::string line = write_slice(mesh, axis, slice_value, outputs, h);
+      outputs.commit();
+      std::cerr << line;
       return kExitOk;
     }
     if (*check_cmd) return run_check(check_in, check_against);

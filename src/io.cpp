@@ -2,6 +2,8 @@
 // write-to-temporary-then-rename rule for output (STYLE.md §6).
 #include "io.hpp"
 
+#include "output.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -51,20 +53,8 @@ void check_readable_file(const std::string &path) {
     throw InputError(path, "empty file");
 }
 
-// ".<name>.tmp<pid><ext>" beside the target: same directory (so rename is
-// atomic) and same extension (so writers that look at it still work).
-std::string temporary_name(const std::string &path) {
-  const fs::path p(path);
-  std::string name = ".";
-  name += p.stem().string();
-  name += ".tmp";
-  name += std::to_string(::getpid());
-  name += p.extension().string();
-  return (p.parent_path() / name).string();
-}
-
-// Errors from the writer name the temporary file; report them against the
-// target instead.
+// Errors from the writer name the file written into; report them against
+// the output's name instead.
 std::string strip_prefix(const std::string &what, const std::string &prefix) {
   return what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what;
 }
@@ -83,30 +73,36 @@ Mesh read_mesh(const std::string &path) {
   return format_of(path) == Format::Vtu ? read_vtu(path) : read_msh(path);
 }
 
-void write_mesh(const std::string &path, const Mesh &mesh) {
-  const Format format = format_of(path);
-  const std::string tmp = temporary_name(path);
-  auto remove_tmp = [&] {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-  };
+static Format format_named(const std::string &name, const std::string &format) {
+  if (format.empty()) return format_of(name);
+  if (format == "vtu") return Format::Vtu;
+  if (format == "msh") return Format::Msh;
+  throw InputError(name, "unknown format '" + format + "' (expected vtu or msh)");
+}
+
+void write_mesh_file(const std::string &file, const std::string &name, const Mesh &mesh,
+                     const std::string &format_name) {
+  const Format format = format_named(name, format_name);
   try {
-    write_as(format, tmp, mesh);
+    write_as(format, file, mesh);
   } catch (const InputError &e) {
-    remove_tmp();
-    throw InputError(path, strip_prefix(e.what(), tmp + ": "));
+    throw InputError(name, strip_prefix(e.what(), file + ": "));
   } catch (const CheckError &e) {
-    remove_tmp();
-    throw CheckError(path + ": " + strip_prefix(e.what(), tmp + ": "));
-  } catch (...) {
-    remove_tmp();
-    throw;
+    throw CheckError(name + ": " + strip_prefix(e.what(), file + ": "));
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    remove_tmp();
-    throw InputError(path, std::string("cannot write: ") + std::strerror(err));
-  }
+}
+
+void check_output_format(const std::string &name, int dim, const std::string &format_name) {
+  const Format format = format_named(name, format_name);
+  if (format == Format::Msh && dim == 4)
+    throw InputError(name, "a .msh file cannot hold a 4D mesh; write .vtu");
+}
+
+void write_mesh(const std::string &path, const Mesh &mesh) {
+  OutputSet out({}, true);
+  const int h = out.add(path);
+  write_mesh_file(out.file(h), path, mesh);
+  out.commit();
 }
 
 } // namespace bisect

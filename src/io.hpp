@@ -16,8 +16,21 @@ namespace bisect {
 Mesh read_mesh(const std::string &path);
 
 // Writes `mesh` as given (cells in their stored vertex order) to `path`,
-// through a temporary file in the same directory renamed when complete.
+// through a temporary file in the same directory renamed when complete (an
+// OutputSet of one, see output.hpp: links are written through, a FIFO or
+// device is written into).
 void write_mesh(const std::string &path, const Mesh &mesh);
+
+// Writes `mesh` into the file `file` (created or truncated) in `format`
+// ("vtu" or "msh"), or when that is empty in the format named by the
+// extension of `name`; errors name `name`. For OutputSet users.
+void write_mesh_file(const std::string &file, const std::string &name, const Mesh &mesh,
+                     const std::string &format = {});
+
+// Checks that `format` (or, when empty, the extension of `name`, any case)
+// is one the writer knows, and that a mesh of dimension `dim` fits it
+// (.msh holds no 4D mesh; dim 0: not known yet).
+void check_output_format(const std::string &name, int dim, const std::string &format = {});
 
 // Format-specific entry points (used by read_mesh/write_mesh and the tests).
 Mesh read_msh(const std::string &path);

@@ -29,6 +29,7 @@
 // cell's entity has a physical tag). The writer omits $Entities for a mesh
 // without these arrays, so that reading gives none back.
 #include "io.hpp"
+#include "output.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -1099,7 +1100,7 @@ class Output {
 public:
   explicit Output(const std::string &path) : path_(path), file_(std::fopen(path.c_str(), "wb")) {
     if (!file_)
-      throw InputError(path, std::string("cannot write: ") + std::strerror(errno));
+      throw InputError(path, "cannot write: " + write_failure(errno));
   }
   ~Output() {
     if (file_)
@@ -1128,7 +1129,7 @@ public:
       error_ = errno ? errno : EIO;
     file_ = nullptr;
     if (error_)
-      throw InputError(path_, std::string("cannot write: ") + std::strerror(error_));
+      throw InputError(path_, "cannot write: " + write_failure(error_));
   }
 
 private:

@@ -13,6 +13,7 @@
 // reader/writer and a quiet global output window) and turned into one
 // InputError naming the file; VTK never prints to stderr.
 #include "io.hpp"
+#include "output.hpp"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -53,6 +54,10 @@
 #include <cctype>
 #include <fstream>
 #include <vector>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace bisect {
 namespace {
@@ -465,14 +470,6 @@ void check_mesh_for_writing(const std::string &path, const Mesh &mesh) {
         fail("point array 't' is reserved for the 4th coordinate of 4D meshes");
 }
 
-// Fails early with the system's reason when the file cannot be created.
-void check_writable(const std::string &path) {
-  std::FILE *f = std::fopen(path.c_str(), "wb");
-  if (!f)
-    throw InputError(path, std::string("cannot write: ") + std::strerror(errno));
-  std::fclose(f);
-}
-
 template <class ArrayT>
 vtkSmartPointer<ArrayT> make_array(const DataArray &a) {
   auto out = vtkSmartPointer<ArrayT>::New();
@@ -770,25 +767,57 @@ Mesh read_vtu(const std::string &path) {
 
 void write_vtu(const std::string &path, const Mesh &mesh) {
   check_mesh_for_writing(path, mesh);
-  check_writable(path);
   vtkSmartPointer<vtkUnstructuredGrid> grid = mesh_to_grid(mesh);
+  // VTK's writer seeks back in its file; a FIFO or a device cannot, so for
+  // those (and for /dev/stdout, whatever it is) the document is made in
+  // memory and then written out in one pass.
+  struct stat st;
+  const bool stream = path.rfind("/dev/", 0) == 0 || path.rfind("/proc/", 0) == 0 ||
+                      (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode));
 
   ActiveLog active;
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   vtkNew<ErrorObserver> observer;
   writer->AddObserver(vtkCommand::ErrorEvent, observer);
-  writer->SetFileName(path.c_str());
+  if (stream)
+    writer->WriteToOutputStringOn();
+  else
+    writer->SetFileName(path.c_str());
   writer->SetInputData(grid);
   writer->SetDataModeToBinary(); // inline base64, not raw appended
   writer->SetCompressorTypeToZLib();
   writer->SetHeaderTypeToUInt64();
   writer->SetIdTypeToInt64();
+  errno = 0;
   const int ok = writer->Write();
-  auto &errors = active.log.errors;
-  if (!errors.empty())
-    throw InputError(path, "cannot write: " + errors.front());
-  if (!ok || writer->GetErrorCode() != vtkErrorCode::NoError)
-    throw InputError(path, "cannot write: " + error_code_text(writer->GetErrorCode()));
+  const int err = errno;
+  // The system's reason when there is one (a full disk, a file size limit,
+  // a vanished directory), never VTK's own report of it.
+  const unsigned long code = writer->GetErrorCode();
+  if (!ok || code != vtkErrorCode::NoError || !active.log.errors.empty()) {
+    if (err != 0) throw InputError(path, "cannot write: " + write_failure(err));
+    if (code == vtkErrorCode::OutOfDiskSpaceError)
+      throw InputError(path, "cannot write: " + write_failure(ENOSPC));
+    throw InputError(path, "cannot write: " + (active.log.errors.empty() ? error_code_text(code)
+                                                                          : active.log.errors.front()));
+  }
+  if (stream) {
+    const std::string text = writer->GetOutputString();
+    const int fd = ::open(path.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+    if (fd < 0) throw InputError(path, "cannot write: " + write_failure(errno));
+    std::size_t done = 0;
+    while (done < text.size()) {
+      const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        const int e = n < 0 ? errno : EIO;
+        ::close(fd);
+        throw InputError(path, "cannot write: " + write_failure(e));
+      }
+      done += std::size_t(n);
+    }
+    if (::close(fd) != 0) throw InputError(path, "cannot write: " + write_failure(errno));
+  }
 }
 
 } // namespace bisect

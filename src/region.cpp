@@ -776,6 +776,12 @@ std::unique_ptr<Region> read_region(const std::string &path, int dim) {
     throw InputError(path, "cannot open: no such file");
   if (fs::is_directory(st))
     throw InputError(path, "is a directory");
+  // A FIFO would block, a device could be endless: regions are small files.
+  if (!fs::is_regular_file(st))
+    throw InputError(path, "not a regular file (a region spec is a JSON file)");
+  constexpr std::uintmax_t kMaxRegionBytes = 64u << 20;
+  if (fs::file_size(path, ec) > kMaxRegionBytes)
+    throw InputError(path, "larger than 64 MiB; a region spec is a small JSON file");
   std::ifstream in(path, std::ios::binary);
   if (!in)
     throw InputError(path, "cannot open for reading");
