@@ -131,6 +131,8 @@ int OutputSet::add(const std::string &path) {
     o.direct = system || !S_ISREG(st.st_mode); // FIFO, character device: written into
   }
   if (!o.direct) {
+    if (fs::path(o.target).filename().string().size() > NAME_MAX)
+      throw InputError(path, "cannot write: file name too long");
     for (const Output &other : outputs_)
       if (!other.direct && same_file(other.target, o.target))
         throw InputError(path, "is also the output " + other.name + "; give each output its own name");
