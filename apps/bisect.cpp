@@ -370,8 +370,9 @@ int run_refine(const RefineArgs &a) {
                     with_commas(r.bisections).c_str(), r.closure_passes, q.min, q.max, sec);
       std::cerr << buf;
     }
-    if (selected.empty()) {
+    if (selected.empty()) { // the same would hold for every later iteration
       if (!a.quiet) std::cerr << "bisect: the region touches no cell; nothing more to refine\n";
+      break;
     }
     if (it == corrupt_after && corrupt_one_bisection(mesh, verts_before) == kNoVertex)
       std::cerr << "bisect: BISECT_TEST_CORRUPT_ITERATION=" << it << ": no bisection to undo\n";
@@ -569,7 +570,7 @@ int write_generated(Mesh mesh, const std::string &out, bool force,
   if (mesh.marked()) encode_state(mesh);
   write_mesh_file(outputs.file(h), out, mesh);
   outputs.commit();
-  std::cout << "wrote " << out << " (" << mesh.num_cells() << " cells, " << mesh.num_vertices()
+  std::cerr << "bisect: wrote " << out << " (" << mesh.num_cells() << " cells, " << mesh.num_vertices()
             << " vertices)\n";
   return kExitOk;
 }
@@ -660,7 +661,7 @@ int run_colour(const std::string &in, bool barycentric, bool recompute, const st
     set_colour_array(mesh, colour);
     write_mesh_file(outputs.file(h), out, mesh);
     outputs.commit();
-    std::cout << "wrote " << out << " (" << mesh.num_cells() << " cells, " << mesh.num_vertices()
+    std::cerr << "bisect: wrote " << out << " (" << mesh.num_cells() << " cells, " << mesh.num_vertices()
               << " vertices, point array " << kColourArray << ")\n";
   }
   return kExitOk;
@@ -684,7 +685,7 @@ int run_extrude_colouring(const std::string &in, const std::vector<double> &slic
   }
   write_output_mesh(outputs, h, st);
   outputs.commit();
-  std::cout << "wrote " << out << " (" << st.num_cells() << (st.dim == 4 ? " pentatopes, " : " tetrahedra, ")
+  std::cerr << "bisect: wrote " << out << " (" << st.num_cells() << (st.dim == 4 ? " pentatopes, " : " tetrahedra, ")
             << st.num_vertices() << " vertices; tagged by the " << how << ")\n";
   return kExitOk;
 }
@@ -880,6 +881,17 @@ int main(int argc, char **argv) {
   } catch (const CLI::CallForVersion &e) {
     return app.exit(e);
   } catch (const CLI::ParseError &e) {
+    // CLI11 says "A subcommand is required" for a misspelt command.
+    std::string names;
+    bool known = false;
+    for (const CLI::App *sub : app.get_subcommands({})) {
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+      known |= argc > 1 && sub->get_name() == argv[1];
+    }
+    if (argc > 1 && argv[1][0] != '-' && !known) {
+      std::cerr << "bisect: unknown command '" << argv[1] << "' (commands: " << names << ")\n";
+      return kExitInput;
+    }
     std::cerr << "bisect: " << e.what() << " (see bisect --help)\n";
     return kExitInput;
   }

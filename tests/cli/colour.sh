@@ -33,7 +33,7 @@ grep -q "^cells: 144216$" "$WORK/out" || fail "ball.msh: expected 24 x 6009 tets
 
 # 3D + time: 4 pentatopes per tet and slab, uneven slices, state carried.
 expect_exit 0 "$BISECT" extrude cube.vtu --slices 0,0.3,1 --method colouring -o st.vtu
-grep -q "(384 pentatopes" "$WORK/out" || fail "expected 48 x 2 x 4 pentatopes"
+grep -q "(384 pentatopes" "$WORK/err" || fail "expected 48 x 2 x 4 pentatopes"
 expect_exit 0 "$BISECT" info st.vtu
 grep -q "^dimension: 4$" "$WORK/out" || fail "not 4D"
 grep -q "^volume: 1$" "$WORK/out" || fail "volume is not 1"
@@ -54,7 +54,7 @@ expect_exit 0 "$BISECT" info st4.vtu
 
 # 2D + time by the barycentric subdivision: tetrahedra, 3 per triangle and slab.
 expect_exit 0 "$BISECT" extrude "$ROOT/data/square.msh" --slices 0:1:2 --method colouring --barycentric -o sq-st.vtu
-grep -q "(14544 tetrahedra" "$WORK/out" || fail "expected 2424 x 2 x 3 tetrahedra"
+grep -q "(14544 tetrahedra" "$WORK/err" || fail "expected 2424 x 2 x 3 tetrahedra"
 expect_exit 0 "$BISECT" check sq-st.vtu
 echo '{"type":"moving_sphere","center":[0.2,0.3],"velocity":[0.5,0.4],"radius":0.25}' >ms2.json
 expect_exit 0 "$BISECT" refine sq-st.vtu --region ms2.json -n 3 -o sq-st3.vtu --check -q
