@@ -10,7 +10,8 @@ namespace bisect {
 
 // Reads the cells of the highest dimension present (triangles -> 2D when all z
 // are 0, tetrahedra -> 3D, pentatopes in the 4D .vtu convention -> 4D).
-// Cells are returned in file order, unmarked (mesh.stage empty). Cell data and
+// Cells are returned in file order (.msh: in element tag order), unmarked
+// (mesh.stage empty). Cell data and
 // point data become DataArrays; Gmsh tags become cell arrays
 // "gmsh:physical" and "gmsh:geometrical". Throws InputError naming the file.
 Mesh read_mesh(const std::string &path);

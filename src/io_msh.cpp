@@ -1089,6 +1089,31 @@ Mesh assemble(Source &src, MshFile &f) {
     else
       m.cell_data.push_back(cell_array(src, f, b, dim));
   }
+  // Cells in element tag order (f.elements is sorted by tag): a file whose
+  // blocks group the elements by entity, as Gmsh and our writer make them,
+  // gives back the cell order the tags say.
+  std::vector<std::uint32_t> by_tag;
+  by_tag.reserve(s.size());
+  for (const ElementRef &e : f.elements)
+    if (e.dim == dim && e.index != kNoIndex) by_tag.push_back(e.index);
+  bool identity = true;
+  for (std::size_t i = 0; i < by_tag.size() && identity; ++i) identity = by_tag[i] == i;
+  if (!identity && by_tag.size() == s.size()) {
+    const std::size_t nvc = std::size_t(dim + 1);
+    std::vector<VertexId> cells(m.cells.size());
+    for (std::size_t i = 0; i < by_tag.size(); ++i)
+      std::copy_n(m.cells.begin() + std::ptrdiff_t(by_tag[i] * nvc), nvc,
+                  cells.begin() + std::ptrdiff_t(i * nvc));
+    m.cells = std::move(cells);
+    for (DataArray &a : m.cell_data) {
+      const std::size_t k = std::size_t(a.components);
+      std::vector<double> values(a.values.size());
+      for (std::size_t i = 0; i < by_tag.size(); ++i)
+        std::copy_n(a.values.begin() + std::ptrdiff_t(by_tag[i] * k), k,
+                    values.begin() + std::ptrdiff_t(i * k));
+      a.values = std::move(values);
+    }
+  }
   return m;
 }
 
@@ -1209,17 +1234,23 @@ struct Entity {
 
 struct Block {
   std::size_t entity;
-  std::size_t first, count; // a run of cells
+  std::size_t first, count; // positions in EntityPlan::order
 };
 
 struct EntityPlan {
   std::vector<Entity> entities;
   std::vector<Block> blocks;
+  // The cells in file order: grouped by entity, entities in order of first
+  // appearance, cells of one entity in mesh order. A cell's element tag is
+  // its index in the mesh plus one (readers that go by tags, Gmsh and ours,
+  // get the mesh's order back); $ElementData lists the cells in file order
+  // with those tags (meshio pairs data with elements by position).
+  std::vector<std::size_t> order;
 };
 
 // One entity per distinct (geometrical, physical) pair, tagged with the
 // geometrical tag unless another pair already took it; one element block per
-// maximal run of consecutive cells of one entity.
+// entity, as Gmsh itself writes them.
 EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const DataArray *geom,
                          const DataArray *phys) {
   EntityPlan plan;
@@ -1230,6 +1261,7 @@ EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const DataAr
       next_tag = std::max(next_tag, tag_value(path, geom, c) + 1);
   std::map<std::pair<long long, long long>, std::size_t> entity_of;
   std::set<long long> taken;
+  std::vector<std::size_t> entity_of_cell(nc);
   for (std::size_t c = 0; c < nc; ++c) {
     const long long g = tag_value(path, geom, c), p = tag_value(path, phys, c);
     auto [it, added] = entity_of.emplace(std::make_pair(g, p), plan.entities.size());
@@ -1251,11 +1283,18 @@ EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const DataAr
         e.hi[i] = std::max(e.hi[i], xi);
       }
     }
-    if (plan.blocks.empty() || plan.blocks.back().entity != it->second)
-      plan.blocks.push_back({it->second, c, 1});
-    else
-      ++plan.blocks.back().count;
+    entity_of_cell[c] = it->second;
   }
+  // Counting sort of the cells by entity.
+  std::vector<std::size_t> count(plan.entities.size(), 0);
+  for (std::size_t c = 0; c < nc; ++c) ++count[entity_of_cell[c]];
+  std::vector<std::size_t> next;
+  for (std::size_t e = 0, first = 0; e < plan.entities.size(); first += count[e], ++e) {
+    plan.blocks.push_back({e, first, count[e]});
+    next.push_back(first);
+  }
+  plan.order.resize(nc);
+  for (std::size_t c = 0; c < nc; ++c) plan.order[next[entity_of_cell[c]]++] = c;
   return plan;
 }
 
@@ -1310,7 +1349,8 @@ void write_elements(Output &out, const Mesh &mesh, const EntityPlan &plan) {
     out.int32(plan.entities[b.entity].tag);
     out.int32(mesh.dim == 2 ? kTriangle : kTetrahedron);
     out.size(b.count);
-    for (std::size_t c = b.first; c < b.first + b.count; ++c) {
+    for (std::size_t i = b.first; i < b.first + b.count; ++i) {
+      const std::size_t c = plan.order[i];
       out.size(c + 1);
       for (int k = 0; k <= mesh.dim; ++k)
         out.size(std::uint64_t(mesh.cell(CellId(c))[k]) + 1);
@@ -1319,15 +1359,18 @@ void write_elements(Output &out, const Mesh &mesh, const EntityPlan &plan) {
   out.text("\n$EndElements\n");
 }
 
-// One $NodeData/$ElementData section: time 0, time step 0.
-void write_data(Output &out, const std::string &section, const DataArray &a, std::size_t n) {
+// One $NodeData/$ElementData section: time 0, time step 0. Row i is entity
+// order[i] (tag order[i] + 1; the identity when order is empty).
+void write_data(Output &out, const std::string &section, const DataArray &a, std::size_t n,
+                const std::vector<std::size_t> &order = {}) {
   out.text("$" + section + "\n1\n\"" + a.name + "\"\n1\n0\n3\n0\n" + std::to_string(a.components) +
            "\n" + std::to_string(n) + "\n");
   const std::size_t nc = std::size_t(a.components);
   for (std::size_t i = 0; i < n; ++i) {
-    out.int32((long long)(i + 1));
+    const std::size_t row = order.empty() ? i : order[i];
+    out.int32((long long)(row + 1));
     for (std::size_t k = 0; k < nc; ++k)
-      out.raw<double>(a.values[i * nc + k]);
+      out.raw<double>(a.values[row * nc + k]);
   }
   out.text("\n$End" + section + "\n");
 }
@@ -1358,7 +1401,7 @@ void write_msh(const std::string &path, const Mesh &mesh) {
     write_data(out, "NodeData", a, mesh.num_vertices());
   for (const DataArray &a : mesh.cell_data)
     if (&a != geom && &a != phys)
-      write_data(out, "ElementData", a, mesh.num_cells());
+      write_data(out, "ElementData", a, mesh.num_cells(), plan.order);
   out.close();
 }
 

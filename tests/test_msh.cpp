@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <unistd.h>
@@ -263,6 +264,49 @@ TEST_CASE("msh: 4.1 binary round trip preserves coordinates, cells and arrays ex
     fs::remove(path);
     fs::remove(again);
   }
+}
+
+TEST_CASE("msh: one element block per entity, data paired by position and by tag", "[io]") {
+  // sample_mesh interleaves its tag arrays in runs: many runs, few entities.
+  const Mesh m = sample_mesh(3, 3);
+  std::set<std::pair<double, double>> entities;
+  const DataArray *geom = find_array(m.cell_data, "gmsh:geometrical");
+  const DataArray *phys = find_array(m.cell_data, "gmsh:physical");
+  REQUIRE((geom && phys));
+  std::size_t runs = 0;
+  for (std::size_t c = 0; c < m.num_cells(); ++c) {
+    entities.insert({geom->values[c], phys->values[c]});
+    if (c == 0 || geom->values[c] != geom->values[c - 1] || phys->values[c] != phys->values[c - 1])
+      ++runs;
+  }
+  REQUIRE(runs > entities.size());
+  const std::string path = temp_path("blocks.msh");
+  write_msh(path, m);
+  const std::string text = read_file(path);
+  const std::size_t at = text.find("$Elements\n");
+  REQUIRE(at != std::string::npos);
+  std::uint64_t blocks = 0, elements = 0;
+  std::memcpy(&blocks, text.data() + at + 10, 8);
+  std::memcpy(&elements, text.data() + at + 18, 8);
+  CHECK(blocks == entities.size());
+  CHECK(elements == m.num_cells());
+  // Element data rows come in file order (what meshio pairs by position):
+  // the first row's tag is the first element's tag.
+  const std::size_t first_element = at + 10 + 32 + 20; // section header, block header
+  std::uint64_t first_tag = 0;
+  std::memcpy(&first_tag, text.data() + first_element, 8);
+  const std::size_t data = text.find("$ElementData\n");
+  REQUIRE(data != std::string::npos);
+  // "...\n3\n0\n<components>\n<count>\n" then the rows.
+  const std::size_t components_line = text.find("\n3\n0\n", data) + 5;
+  const std::size_t count_line = text.find('\n', components_line) + 1;
+  const std::size_t first_row = text.find('\n', count_line) + 1;
+  std::int32_t first_row_tag = 0;
+  std::memcpy(&first_row_tag, text.data() + first_row, 4);
+  CHECK(std::uint64_t(first_row_tag) == first_tag);
+  // Read back (by tags): the mesh's own order and data.
+  require_identical(m, read_msh(path));
+  fs::remove(path);
 }
 
 TEST_CASE("msh: a mesh without gmsh tag arrays round trips without gaining any", "[io]") {
