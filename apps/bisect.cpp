@@ -30,6 +30,7 @@
 #include <iostream>
 #include <map>
 #include <sstream>
+#include <sys/resource.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -90,9 +91,24 @@ std::string with_commas(std::size_t n) {
   return s;
 }
 
+// Wall seconds per stage of a run, for --json (and bench/e2e.sh).
+struct StageSeconds {
+  double read = 0, validate = 0, select = 0, refine = 0, quality = 0, write = 0;
+};
+
+// Peak resident memory of this process so far, in bytes.
+double peak_rss_bytes() {
+  struct rusage u {};
+  ::getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) * 1024.0;
+}
+
 // Reads, validates and marks (or restores the marks of) an input mesh.
-Mesh load_mesh(const std::string &path, std::optional<Marking> requested, bool quiet) {
+Mesh load_mesh(const std::string &path, std::optional<Marking> requested, bool quiet,
+               StageSeconds *stages = nullptr) {
+  auto t0 = std::chrono::steady_clock::now();
   Mesh mesh = read_mesh(path);
+  auto t1 = std::chrono::steady_clock::now();
   prepare_input(mesh, path);
   if (decode_state(mesh, path)) {
     if (requested && *requested != mesh.marking && !quiet)
@@ -101,6 +117,10 @@ Mesh load_mesh(const std::string &path, std::optional<Marking> requested, bool q
                 << marking_name(*requested) << " ignored)\n";
   } else {
     mark_mesh(mesh, requested.value_or(Marking::Index));
+  }
+  if (stages) {
+    stages->read += std::chrono::duration<double>(t1 - t0).count();
+    stages->validate += seconds_since(t1);
   }
   return mesh;
 }
@@ -295,7 +315,8 @@ int run_refine(const RefineArgs &a) {
   std::vector<int> h_slices;
   for (double t : a.slices) h_slices.push_back(outputs.add(slice_path(out, "t", t)));
 
-  Mesh mesh = load_mesh(a.input, marking, a.quiet);
+  StageSeconds stages;
+  Mesh mesh = load_mesh(a.input, marking, a.quiet, &stages);
   check_output_format(out, mesh.dim, a.format);
   if (!a.slices.empty() && mesh.dim < 3)
     throw UsageError("--slices needs a 3D (2D+t) or 4D mesh; " + a.input + " is 2D");
@@ -338,13 +359,16 @@ int run_refine(const RefineArgs &a) {
     if (g_interrupted) break;
     auto t0 = std::chrono::steady_clock::now();
     std::vector<CellId> selected = select_cells(mesh, *region);
+    stages.select += seconds_since(t0);
     if (std::string why = memory_shortfall(mesh, selected.size(), a.max_memory_gib); !why.empty()) {
       limit_reached = true;
       if (!a.quiet) std::cerr << "bisect: stopping before iteration " << it << ": " << why << "\n";
       break;
     }
     const std::size_t verts_before = mesh.num_vertices();
+    auto t_refine = std::chrono::steady_clock::now();
     RefineResult r = refine(mesh, selected, limits);
+    stages.refine += seconds_since(t_refine);
     if (r.cancelled) break;
     if (r.limit_reached) {
       limit_reached = true;
@@ -355,7 +379,9 @@ int run_refine(const RefineArgs &a) {
                   << " (" << with_commas(mesh.num_cells()) << " cells now)\n";
       break;
     }
+    auto t_quality = std::chrono::steady_clock::now();
     q = quality_summary(mesh);
+    stages.quality += seconds_since(t_quality);
     double sec = seconds_since(t0);
     row(it, r.selected, r.bisections, q, sec);
     total_bisections += r.bisections;
@@ -389,12 +415,14 @@ int run_refine(const RefineArgs &a) {
     std::cerr << "bisect: interrupted; no output written\n";
     return kExitInterrupted;
   }
+  auto t_write = std::chrono::steady_clock::now();
   if (h_csv >= 0) write_text_file(outputs.file(h_csv), csv, rows.str());
   write_output_mesh(outputs, h_mesh, mesh, a.format);
   std::string slice_lines;
   for (std::size_t i = 0; i < a.slices.size(); ++i)
     slice_lines += write_slice(mesh, mesh.dim - 1, a.slices[i], outputs, h_slices[i]);
   outputs.commit();
+  stages.write = seconds_since(t_write);
   if (!a.quiet) std::cerr << slice_lines;
   double total = seconds_since(t_start);
   if (a.json) {
@@ -415,6 +443,10 @@ int run_refine(const RefineArgs &a) {
     j["mean_quality"] = q.mean;
     j["limit_reached"] = limit_reached;
     j["seconds"] = total;
+    j["stages"] = {{"read", stages.read},       {"validate", stages.validate},
+                   {"select", stages.select},   {"refine", stages.refine},
+                   {"quality", stages.quality}, {"write", stages.write}};
+    j["peak_rss_bytes"] = peak_rss_bytes();
     std::cout << j.dump() << std::endl;
   }
   if (!a.quiet)

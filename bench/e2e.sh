@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# End-to-end benchmark: `bisect refine` as a user runs it (one process: read,
+# validate, select, refine, quality, write .vtu), per stage, from its --json.
+# Prints one JSON object per case on stdout, with the machine's load.
+#
+#   bash bench/e2e.sh                 # 3D ball 12 iterations, 4D hypercube 25
+#   ITER3D=14 ITER4D=25 bash bench/e2e.sh
+#   BISECT=build/bisect OUT=/tmp/bench bash bench/e2e.sh
+#
+# Figures: generated cells per second (cells made / whole run), and peak
+# resident bytes per final cell. A baseline to compare with is kept in
+# bench/baseline-e2e.jsonl (bash bench/e2e.sh > new.jsonl, then
+# /usr/bin/python3 bench/compare.py bench/baseline-e2e.jsonl new.jsonl).
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+BISECT=${BISECT:-$root/build/bisect}
+OUT=${OUT:-$(mktemp -d)}
+ITER3D=${ITER3D:-12}
+ITER4D=${ITER4D:-25}
+mkdir -p "$OUT"
+load=$(cut -d' ' -f1-3 /proc/loadavg)
+cpus=$(nproc)
+
+run_case() { # name input region iterations extra...
+  local name=$1 input=$2 region=$3 n=$4
+  shift 4
+  local json
+  json=$("$BISECT" refine "$input" --region "$region" -n "$n" -o "$OUT/$name.vtu" -f -q --json "$@")
+  /usr/bin/python3 - "$name" "$load" "$cpus" "$json" <<'EOF'
+import json, sys
+name, load, cpus, j = sys.argv[1], sys.argv[2], int(sys.argv[3]), json.loads(sys.argv[4])
+made = j["cells"] - j["initial_cells"]
+out = {
+    "case": name, "dim": j["dim"], "iterations": j["iterations"],
+    "initial_cells": j["initial_cells"], "cells": j["cells"],
+    "seconds": round(j["seconds"], 3),
+    "stages": {k: round(v, 3) for k, v in j["stages"].items()},
+    "generated_cells_per_second": round(made / j["seconds"]),
+    "seconds_per_million_generated": round(j["seconds"] / made * 1e6, 3),
+    "peak_bytes_per_cell": round(j["peak_rss_bytes"] / j["cells"], 1),
+    "load_before": load, "cpus": cpus,
+}
+print(json.dumps(out))
+EOF
+}
+
+run_case ball-hemisphere "$root/data/ball.msh" "$root/data/regions/hemisphere.json" "$ITER3D"
+"$BISECT" generate kuhn --dim 4 --cells 1 -o "$OUT/hypercube.vtu" -f 2>/dev/null
+run_case hypercube-moving-sphere "$OUT/hypercube.vtu" "$root/data/regions/moving-sphere.json" \
+  "$ITER4D" -m longest
