@@ -12,6 +12,7 @@
 #include "refine.hpp"
 #include "region.hpp"
 #include "slice.hpp"
+#include "vtu_write.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -192,7 +193,7 @@ std::string memory_shortfall(const Mesh &mesh, std::size_t selected, double max_
 }
 
 struct RefineArgs {
-  std::string input, region, output, csv, format;
+  std::string input, region, output, csv, format, compression = "zlib";
   int iterations = 1;
   std::string marking;
   std::int64_t max_elements = 0;
@@ -315,6 +316,9 @@ int run_refine(const RefineArgs &a) {
   std::vector<int> h_slices;
   for (double t : a.slices) h_slices.push_back(outputs.add(slice_path(out, "t", t)));
 
+  set_vtu_compression(a.compression == "lz4"    ? VtuCompression::Lz4
+                      : a.compression == "none" ? VtuCompression::None
+                                                : VtuCompression::Zlib);
   StageSeconds stages;
   Mesh mesh = load_mesh(a.input, marking, a.quiet, &stages);
   check_output_format(out, mesh.dim, a.format);
@@ -756,6 +760,10 @@ int main(int argc, char **argv) {
                          "Output format when the output's name has no .vtu/.msh extension "
                          "(e.g. -o /dev/stdout --format vtu)")
       ->check(CLI::IsMember({"vtu", "msh"}));
+  refine_cmd->add_option("--compression", ra.compression,
+                         ".vtu output: zlib (default), lz4 (faster, larger) or none; ParaView and "
+                         "VTK read all three")
+      ->check(CLI::IsMember({"zlib", "lz4", "none"}));
   refine_cmd->add_option("--quality-csv", ra.csv,
                          "Per-iteration quality CSV; default <output stem>.quality.csv; none: no CSV");
   refine_cmd->add_option("--marking,-m", ra.marking,

@@ -14,6 +14,7 @@
 // InputError naming the file; VTK never prints to stderr.
 #include "io.hpp"
 #include "output.hpp"
+#include "vtu_write.hpp"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -470,77 +471,6 @@ void check_mesh_for_writing(const std::string &path, const Mesh &mesh) {
         fail("point array 't' is reserved for the 4th coordinate of 4D meshes");
 }
 
-template <class ArrayT>
-vtkSmartPointer<ArrayT> make_array(const DataArray &a) {
-  auto out = vtkSmartPointer<ArrayT>::New();
-  out->SetName(a.name.c_str());
-  out->SetNumberOfComponents(a.components);
-  out->SetNumberOfTuples(vtkIdType(a.values.size() / a.components));
-  for (std::size_t i = 0; i < a.values.size(); ++i)
-    out->SetValue(vtkIdType(i), static_cast<typename ArrayT::ValueType>(a.values[i]));
-  return out;
-}
-
-// Integer-valued cell arrays (tags, ids) stay integers in the file.
-bool fits_int32(const std::vector<double> &values) {
-  for (double v : values)
-    if (!(v >= std::numeric_limits<std::int32_t>::min() &&
-          v <= std::numeric_limits<std::int32_t>::max() && v == std::trunc(v)))
-      return false;
-  return true;
-}
-
-vtkSmartPointer<vtkUnstructuredGrid> mesh_to_grid(const Mesh &mesh) {
-  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
-  const int dim = mesh.dim, nvc = dim + 1;
-  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
-
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(vtkIdType(nv));
-  for (std::size_t v = 0; v < nv; ++v) {
-    const double *x = mesh.point(VertexId(v));
-    points->SetPoint(vtkIdType(v), x[0], x[1], dim >= 3 ? x[2] : 0.0);
-  }
-  grid->SetPoints(points);
-
-  // Cells in stored vertex order, 64-bit offsets and connectivity.
-  vtkNew<vtkTypeInt64Array> offsets, connectivity;
-  offsets->SetNumberOfValues(vtkIdType(nc + 1));
-  connectivity->SetNumberOfValues(vtkIdType(nc * nvc));
-  for (std::size_t c = 0; c <= nc; ++c)
-    offsets->SetValue(vtkIdType(c), vtkTypeInt64(c * nvc));
-  for (std::size_t i = 0; i < mesh.cells.size(); ++i)
-    connectivity->SetValue(vtkIdType(i), mesh.cells[i]);
-  vtkNew<vtkCellArray> cells;
-  cells->SetData(offsets, connectivity);
-  const int type = dim == 2 ? VTK_TRIANGLE : dim == 3 ? VTK_TETRA : VTK_POLY_VERTEX;
-  grid->SetCells(type, cells);
-
-  for (const auto &a : mesh.point_data)
-    grid->GetPointData()->AddArray(make_array<vtkDoubleArray>(a));
-  for (const auto &a : mesh.cell_data) {
-    if (fits_int32(a.values))
-      grid->GetCellData()->AddArray(make_array<vtkIntArray>(a));
-    else
-      grid->GetCellData()->AddArray(make_array<vtkDoubleArray>(a));
-  }
-
-  if (dim == 4) {
-    DataArray t{"t", 1, {}};
-    t.values.reserve(nv);
-    for (std::size_t v = 0; v < nv; ++v)
-      t.values.push_back(mesh.point(VertexId(v))[3]);
-    grid->GetPointData()->AddArray(make_array<vtkDoubleArray>(t));
-    vtkNew<vtkIntArray> sd;
-    sd->SetName("SpatialDimension");
-    sd->SetNumberOfValues(1);
-    sd->SetValue(0, 4);
-    grid->GetFieldData()->AddArray(sd);
-  }
-  return grid;
-}
-
 } // namespace
 
 namespace {
@@ -767,57 +697,14 @@ Mesh read_vtu(const std::string &path) {
 
 void write_vtu(const std::string &path, const Mesh &mesh) {
   check_mesh_for_writing(path, mesh);
-  vtkSmartPointer<vtkUnstructuredGrid> grid = mesh_to_grid(mesh);
-  // VTK's writer seeks back in its file; a FIFO or a device cannot, so for
-  // those (and for /dev/stdout, whatever it is) the document is made in
-  // memory and then written out in one pass.
-  struct stat st;
-  const bool stream = path.rfind("/dev/", 0) == 0 || path.rfind("/proc/", 0) == 0 ||
-                      (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode));
-
-  ActiveLog active;
-  vtkNew<vtkXMLUnstructuredGridWriter> writer;
-  vtkNew<ErrorObserver> observer;
-  writer->AddObserver(vtkCommand::ErrorEvent, observer);
-  if (stream)
-    writer->WriteToOutputStringOn();
-  else
-    writer->SetFileName(path.c_str());
-  writer->SetInputData(grid);
-  writer->SetDataModeToBinary(); // inline base64, not raw appended
-  writer->SetCompressorTypeToZLib();
-  writer->SetHeaderTypeToUInt64();
-  writer->SetIdTypeToInt64();
-  errno = 0;
-  const int ok = writer->Write();
-  const int err = errno;
-  // The system's reason when there is one (a full disk, a file size limit,
-  // a vanished directory), never VTK's own report of it.
-  const unsigned long code = writer->GetErrorCode();
-  if (!ok || code != vtkErrorCode::NoError || !active.log.errors.empty()) {
-    if (err != 0) throw InputError(path, "cannot write: " + write_failure(err));
-    if (code == vtkErrorCode::OutOfDiskSpaceError)
-      throw InputError(path, "cannot write: " + write_failure(ENOSPC));
-    throw InputError(path, "cannot write: " + (active.log.errors.empty() ? error_code_text(code)
-                                                                          : active.log.errors.front()));
-  }
-  if (stream) {
-    const std::string text = writer->GetOutputString();
-    const int fd = ::open(path.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
-    if (fd < 0) throw InputError(path, "cannot write: " + write_failure(errno));
-    std::size_t done = 0;
-    while (done < text.size()) {
-      const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) {
-        const int e = n < 0 ? errno : EIO;
-        ::close(fd);
-        throw InputError(path, "cannot write: " + write_failure(e));
-      }
-      done += std::size_t(n);
-    }
-    if (::close(fd) != 0) throw InputError(path, "cannot write: " + write_failure(errno));
-  }
+  write_vtu_native(path, mesh, vtu_compression());
 }
+
+namespace {
+VtuCompression g_vtu_compression = VtuCompression::Zlib;
+} // namespace
+
+void set_vtu_compression(VtuCompression c) { g_vtu_compression = c; }
+VtuCompression vtu_compression() { return g_vtu_compression; }
 
 } // namespace bisect
