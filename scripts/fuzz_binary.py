@@ -922,7 +922,10 @@ def mutate_mesh(r, data, fmt, seedname):
             m = r.choices([x for x, _ in ws], [w for _, w in ws])[0]
             if not data:
                 return data, names + ["empty"]
-            out = m(r, data, ctx)
+            try:
+                out = m(r, data, ctx)
+            except (ValueError, IndexError, KeyError, struct.error, zlib.error, OverflowError):
+                out = None  # a mutator that cannot apply to this input
             if out is not None and out != data:
                 data = out
                 names.append(m.__name__[2:])
@@ -1173,7 +1176,10 @@ def make_case(seed, fmt, i, seeds, region_seeds):
     name, data = r.choice(seeds)
     dim = seed_dim(name)
     if fmt == "json":
-        mdata, muts = mutate_json(r, data.decode())
+        try:
+            mdata, muts = mutate_json(r, data.decode())
+        except (ValueError, TypeError, KeyError, IndexError, RecursionError):
+            mdata, muts = mutate_mesh(r, data, fmt, name)
         return {"fmt": fmt, "i": i, "seed": name, "dim": dim, "target": "region", "data": mdata,
                 "region": None, "muts": muts}
     mdata, muts = mutate_mesh(r, data, fmt, name)
@@ -1346,7 +1352,18 @@ def main():
     ap.add_argument("--dim", type=int, default=3)
     ap.add_argument("--minimize-from", nargs="+", metavar="DIR",
                     help="minimize the saved findings of earlier runs (their --out dirs) into OUT/minimized/")
+    ap.add_argument("--merge", nargs="+", metavar="JSONL",
+                    help="print the format x outcome table of earlier runs' cases-*.jsonl logs and exit")
     a = ap.parse_args()
+    if a.merge:
+        counts = {}
+        for fn in a.merge:
+            for line in open(fn):
+                c = json.loads(line)
+                counts.setdefault(c["fmt"], {})
+                counts[c["fmt"]][c["class"]] = counts[c["fmt"]].get(c["class"], 0) + 1
+        print(table(counts, [f for f in FORMATS if f in counts]))
+        return
     binary = os.path.abspath(a.binary)
     if not os.access(binary, os.X_OK):
         sys.exit("no executable %s (--binary)" % binary)
