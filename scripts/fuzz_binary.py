@@ -1117,6 +1117,7 @@ def run_case(binary, seedpath, data, region, dim, target, timeout=TIMEOUT, keep_
         elif rc < 0:
             cls = "crash"
             res["signal"] = signal.Signals(-rc).name if -rc in signal.Signals._value2member_map_ else str(-rc)
+            res["frame"] = crash_frame(cmd, d, timeout)
         elif rc == 2:
             cls = "check-failed"
         elif rc in (0, 3):
@@ -1128,6 +1129,10 @@ def run_case(binary, seedpath, data, region, dim, target, timeout=TIMEOUT, keep_
             else:
                 crc, cso, cse = _run([binary, "check", out, "--against", inp], d, 30)
                 res["check"] = (cso + cse).decode("utf-8", "replace")[:1000]
+                res["check_rc"] = crc
+                if crc is None or crc < 0:  # the check itself hung or crashed
+                    res["check"] = "check %s: %s" % ("timeout" if crc is None else "killed by signal %d" % -crc,
+                                                     res["check"])
                 cls = "ok" if crc == 0 else "wrong"
         elif rc == 1:
             if files:
@@ -1147,9 +1152,21 @@ def run_case(binary, seedpath, data, region, dim, target, timeout=TIMEOUT, keep_
         shutil.rmtree(d, ignore_errors=True)
 
 
+def crash_frame(cmd, cwd, timeout):
+    """The innermost named function of a crash, by re-running under gdb (when installed)."""
+    if not shutil.which("gdb"):
+        return ""
+    rc, so, se = _run(["gdb", "-batch", "-nx", "-ex", "run", "-ex", "bt 8", "--args"] + cmd, cwd, 6 * timeout)
+    for line in so.decode("utf-8", "replace").split("\n"):
+        m = re.match(r"#\d+\s+(?:0x[0-9a-f]+ in )?([^\s(]+(?:\([^)]*\))?)", line)
+        if m and "??" not in m.group(1) and not m.group(1).startswith(("std::", "__", "operator", "raise", "abort")):
+            return re.sub(r"\(.*", "", m.group(1))[:120]
+    return ""
+
+
 def dedup_key(cls, res, fuzzed):
     if cls == "crash":
-        return "%s|%s|%s" % (cls, res.get("signal"), normalise(res["first"]))
+        return "%s|%s|%s|%s" % (cls, res.get("signal"), res.get("frame", ""), normalise(res["first"]))
     if cls == "hang":
         return cls
     if cls == "wrong":
