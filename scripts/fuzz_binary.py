@@ -1243,6 +1243,8 @@ def save_finding(outdir, case, cls, tag=None):
         f.write("command (in a fresh directory, input copied as %s): %s\n" % (res["cmd"][2], " ".join(res["cmd"][1:])))
         f.write("class: %s  exit: %s  signal: %s  time: %ss  files left: %s\n" % (
             cls, res["rc"], res.get("signal"), res["time"], res["files"]))
+        if res.get("frame"):
+            f.write("crashed in: %s\n" % res["frame"])
         f.write("check: %s\n--- stderr ---\n%s" % (res["check"], res["stderr"]))
     return stem + ext
 
