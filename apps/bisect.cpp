@@ -74,6 +74,22 @@ void install_signal_handlers() {
   std::signal(SIGPIPE, SIG_IGN);
 }
 
+// An error message as one line: control characters a hostile file put into
+// it (a newline inside an attribute) are shown escaped.
+std::string one_line(const std::string &text) {
+  std::string out;
+  for (unsigned char c : text) {
+    if (c == '\n') out += "\\n";
+    else if (c == '\r') out += "\\r";
+    else if (c < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02X", c);
+      out += buf;
+    } else out += char(c);
+  }
+  return out;
+}
+
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
@@ -1001,19 +1017,19 @@ int main(int argc, char **argv) {
       return write_generated(generate_kuhn(g_dim, k_cells, k_lo, k_hi), g_out, g_force);
     }
   } catch (const InputError &e) {
-    std::cerr << "bisect: " << e.what() << "\n";
+    std::cerr << "bisect: " << one_line(e.what()) << "\n";
     return kExitInput;
   } catch (const UsageError &e) {
-    std::cerr << "bisect: " << e.what() << "\n";
+    std::cerr << "bisect: " << one_line(e.what()) << "\n";
     return kExitInput;
   } catch (const CheckError &e) {
-    std::cerr << "bisect: internal check failed: " << e.what() << "\n";
+    std::cerr << "bisect: internal check failed: " << one_line(e.what()) << "\n";
     return kExitCheck;
   } catch (const std::bad_alloc &) {
     std::cerr << "bisect: out of memory; no output written (try --max-elements)\n";
     return kExitInput;
   } catch (const std::exception &e) {
-    std::cerr << "bisect: internal error: " << e.what() << "\n";
+    std::cerr << "bisect: internal error: " << one_line(e.what()) << "\n";
     return kExitCheck;
   }
   return kExitOk;
