@@ -319,3 +319,120 @@ TEST_CASE("vtu formats: several pieces are concatenated with point ids offset", 
       fs::remove(path);
     }
 }
+
+namespace {
+
+void write_text(const std::string &path, const std::string &text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+// The message of the InputError that reading `text` as a .vtu file throws.
+std::string read_error(const std::string &text) {
+  const std::string path = temp_file("error.vtu");
+  write_text(path, text);
+  try {
+    read_vtu(path);
+  } catch (const InputError &e) {
+    const std::string what = e.what();
+    CHECK(what.find("error.vtu") != std::string::npos);
+    CHECK(what.find('\n') == std::string::npos);
+    return what;
+  }
+  FAIL("no error for " << text.substr(0, 400));
+  return {};
+}
+
+// One triangle, hand-written, with the given pieces of XML spliced in.
+std::string triangle_file(const std::string &point_data, const std::string &cell_data,
+                          const std::string &piece_attrs = "NumberOfPoints='3' NumberOfCells='1'") {
+  return "<?xml version='1.0' encoding='utf-8'?>\n<!-- written by hand -->\n"
+         "<VTKFile type='UnstructuredGrid' version='2.2' byte_order='LittleEndian'>\n"
+         "<UnstructuredGrid><!-- a comment -->\n<Piece " + piece_attrs + ">\n"
+         "<PointData>" + point_data + "</PointData><CellData>" + cell_data + "</CellData>\n"
+         "<Points><DataArray type='Float32' NumberOfComponents='3' format='ascii'>"
+         "0 0 0 1 0 0 0 1 0</DataArray></Points>\n"
+         "<Cells><DataArray type='Int32' Name='connectivity'>0 1 2</DataArray>"
+         "<DataArray type='Int8' Name=\"offsets\" format='ascii'>+3</DataArray>"
+         "<DataArray type='UInt16' Name='types' format='ascii'>5</DataArray></Cells>\n"
+         "</Piece></UnstructuredGrid></VTKFile>\n";
+}
+
+} // namespace
+
+TEST_CASE("vtu formats: comments, single quotes and unnamed arrays numbered as VTK does",
+          "[io][2d]") {
+  const std::string path = temp_file("by-hand.vtu");
+  write_text(path, triangle_file(
+                       "<DataArray type='String' Name='s' format='ascii'>97 0 98 0 99 0</DataArray>"
+                       "<DataArray type='Float64' format='ascii'>1 2 nan</DataArray>"
+                       "<DataArray type='Float64' Name='a&amp;b' format='ascii'>4e-320 5 6"
+                       "<InformationKey name='X' location='Y' length='1'><Value index='0'>1"
+                       "</Value></InformationKey></DataArray>",
+                       "<DataArray type='UInt64' format='ascii'>18446744073709551615</DataArray>"));
+  const Mesh m = read_vtu(path);
+  REQUIRE(m.dim == 2);
+  CHECK(m.cells == std::vector<VertexId>{0, 1, 2});
+  REQUIRE(m.point_data.size() == 2);
+  CHECK(m.point_data[0].name == "unnamed1");
+  CHECK(std::isnan(m.point_data[0].values[2]));
+  CHECK(m.point_data[1].name == "a&b");
+  CHECK(m.point_data[1].values == std::vector<double>{4e-320, 5, 6});
+  REQUIRE(m.cell_data.size() == 1);
+  CHECK(m.cell_data[0].name == "unnamed0");
+  CHECK(m.cell_data[0].values == std::vector<double>{18446744073709551615.0});
+}
+
+TEST_CASE("vtu formats: integer arrays hold integers of their type, named in the error",
+          "[io]") {
+  const auto cell = [](const std::string &type, const std::string &value) {
+    return triangle_file("", "<DataArray type='" + type + "' Name='m' format='ascii'>" + value +
+                                 "</DataArray>");
+  };
+  CHECK_THAT(read_error(cell("Int32", "nan")),
+             Catch::Contains("cell data array 'm': value 0 ('nan') is not an integer of type Int32"));
+  CHECK_THAT(read_error(cell("UInt8", "-1")), Catch::Contains("('-1') is out of range for UInt8"));
+  CHECK_THAT(read_error(cell("Int8", "128")), Catch::Contains("('128') is out of range for Int8"));
+  CHECK_THAT(read_error(cell("Float32", "1e39")), Catch::Contains("is out of range for Float32"));
+  CHECK_THAT(read_error(cell("Int32", "1 2")),
+             Catch::Contains("cell data array 'm': has more than the 1 values expected"));
+  CHECK_THAT(read_error(cell("Int32", "")),
+             Catch::Contains("cell data array 'm': has 0 values, expected 1"));
+  CHECK_THAT(read_error(cell("Int33", "1")), Catch::Contains("unknown type 'Int33'"));
+}
+
+TEST_CASE("vtu formats: sizes claimed far beyond the file are refused before allocating",
+          "[io]") {
+  CHECK_THAT(read_error(triangle_file("", "", "NumberOfPoints='3000000000000' NumberOfCells='1'")),
+             Catch::Contains("Points: has 9 values, expected 9000000000000"));
+  // An uncompressed inline array whose header claims 2^62 bytes.
+  const std::string huge = "AAAAAAAAAEA="; // base64 of the UInt64 2^62, little-endian
+  std::string text = triangle_file("", "<DataArray type='Int32' Name='m' format='binary'>" + huge +
+                                           "AQAAAA==</DataArray>");
+  text.replace(text.find("version='2.2'"), 13, "version='1.0' header_type='UInt64'");
+  CHECK_THAT(read_error(text), Catch::Contains("cell data array 'm': header claims 4611686018427387904 bytes"));
+}
+
+TEST_CASE("vtu formats: malformed XML is refused with the byte offset", "[io]") {
+  CHECK_THAT(read_error("<VTKFile type='UnstructuredGrid'><UnstructuredGrid></VTKFile>"),
+             Catch::Contains("XML error at byte 51: </VTKFile> does not close <UnstructuredGrid>"));
+  CHECK_THAT(read_error("<VTKFile type='UnstructuredGrid' a='1' a='2'/>"),
+             Catch::Contains("attribute a given twice"));
+  CHECK_THAT(read_error("<VTKFile type='UnstructuredGrid'/><VTKFile/>"),
+             Catch::Contains("a second root element"));
+  CHECK_THAT(read_error("<VTKFile type='UnstructuredGrid'><UnstructuredGrid/></VTKFile>"),
+             Catch::Contains("<UnstructuredGrid> has no <Piece>"));
+  CHECK_THAT(read_error("<VTKFile type='UnstructuredGrid' version='3.0'/>"),
+             Catch::Contains("version '3.0'"));
+  CHECK_THAT(read_error("<VTKFile type='UnstructuredGrid' compressor='vtkBZip'/>"),
+             Catch::Contains("unknown compressor 'vtkBZip'"));
+}
+
+TEST_CASE("vtu formats: pieces with different arrays are refused", "[io]") {
+  std::string text = triangle_file("<DataArray type='Float64' Name='p' format='ascii'>1 2 3</DataArray>", "");
+  const std::size_t b = text.find("<Piece"), e = text.find("</Piece>") + 8;
+  std::string second = text.substr(b, e - b);
+  second.replace(second.find("Name='p'"), 8, "Name='q'");
+  text.insert(e, second);
+  CHECK_THAT(read_error(text), Catch::Contains("piece 1 has other point data arrays than piece 0"));
+}
