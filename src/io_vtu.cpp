@@ -237,7 +237,7 @@ bool is_4d(const vtu::Grid &g) {
 // The cells kept by the reader (file ids) and the dimension they define.
 struct KeptCells {
   int dim = 0;
-  std::vector<std::size_t> ids;
+  std::vector<CellId> ids;
 };
 
 KeptCells select_cells_4d(const std::string &path, const vtu::Grid &g) {
@@ -249,7 +249,7 @@ KeptCells select_cells_4d(const std::string &path, const vtu::Grid &g) {
       if (npts != 5)
         throw InputError(path, "4D mesh: cell " + std::to_string(c) + " has " +
                                    std::to_string(npts) + " vertices, expected 5");
-      kept.ids.push_back(c);
+      kept.ids.push_back(CellId(c));
     } else if (type != 1 && type != 3 && type != kTriangle && type != kTetra) {
       // Lower-dimensional simplices (boundary pieces) are ignored; anything
       // else cannot be part of a pentatope mesh.
@@ -286,19 +286,25 @@ KeptCells select_cells(const std::string &path, const vtu::Grid &g) {
   for (std::size_t c = 0; c < g.num_cells; ++c) {
     const std::int64_t type = g.types[c];
     if (type == simplex)
-      kept.ids.push_back(c);
+      kept.ids.push_back(CellId(c));
     else if (linear_cell(type)->dim >= dim)
       throw InputError(path, "mixed non-simplex cells (VTK type " + std::to_string(type) + ")");
   }
   return kept;
 }
 
-// Copies the selected tuples (file ids in `rows`) of `a`.
+// The selected tuples (file ids in `rows`) of `a`; all of them, in order,
+// are moved rather than copied.
 template <class Row>
-DataArray copy_rows(const vtu::Array &a, const std::string &name, const std::vector<Row> &rows) {
+DataArray take_rows(vtu::Array &a, const std::string &name, const std::vector<Row> &rows,
+                    bool all_rows) {
   DataArray out;
   out.name = name;
   out.components = a.components;
+  if (all_rows) {
+    out.values = std::move(a.values);
+    return out;
+  }
   const std::size_t k = std::size_t(a.components);
   out.values.resize(rows.size() * k);
   double *to = out.values.data();
@@ -319,13 +325,13 @@ const vtu::Array &time_array(const std::string &path, const vtu::Grid &g) {
   return *t; // one value per point: the reader checked the count
 }
 
-Mesh grid_to_mesh(const std::string &path, const vtu::Grid &g) {
+Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
   check_cell_types(path, g);
   const bool four = is_4d(g);
   const std::size_t np = g.num_points;
-  KeptCells kept = four ? select_cells_4d(path, g) : select_cells(path, g);
-  if (kept.ids.size() >= std::size_t(kNoCell))
+  if (g.num_cells >= std::size_t(kNoCell))
     throw InputError(path, "too many cells");
+  KeptCells kept = four ? select_cells_4d(path, g) : select_cells(path, g);
   const vtu::Array *t = four ? &time_array(path, g) : nullptr;
 
   // Cells, with their vertices numbered compactly in file order. (Ids are
@@ -333,7 +339,7 @@ Mesh grid_to_mesh(const std::string &path, const vtu::Grid &g) {
   // check_cell_types made sure.)
   const int nvc = kept.dim + 1;
   std::vector<VertexId> new_id(np, kNoVertex);
-  for (std::size_t c : kept.ids) {
+  for (CellId c : kept.ids) {
     const std::int64_t *pts = g.connectivity.data() + g.offsets[c];
     for (int i = 0; i < nvc; ++i) {
       for (int j = 0; j < i; ++j)
@@ -343,26 +349,31 @@ Mesh grid_to_mesh(const std::string &path, const vtu::Grid &g) {
       new_id[std::size_t(pts[i])] = 0; // used
     }
   }
-  std::vector<std::size_t> used; // file ids of the kept points, in order
+  std::vector<VertexId> used; // file ids of the kept points, in order
+  used.reserve(np);
   for (std::size_t p = 0; p < np; ++p)
     if (new_id[p] != kNoVertex) {
       new_id[p] = VertexId(used.size());
-      used.push_back(p);
+      used.push_back(VertexId(p));
     }
+  const bool all_points = used.size() == np, all_cells = kept.ids.size() == g.num_cells;
 
   Mesh mesh;
   mesh.dim = kept.dim;
   mesh.cells.resize(kept.ids.size() * std::size_t(nvc));
   VertexId *to = mesh.cells.data();
-  for (std::size_t c : kept.ids) {
+  for (CellId c : kept.ids) {
     const std::int64_t *pts = g.connectivity.data() + g.offsets[c];
     for (int i = 0; i < nvc; ++i)
       *to++ = new_id[std::size_t(pts[i])];
   }
+  g.connectivity = {}; // done with: free it before the arrays are copied
 
   // Coordinates: (x, y) in 2D, (x, y, z) in 3D, (x, y, z, t) in 4D.
-  mesh.coords.reserve(used.size() * std::size_t(mesh.dim));
-  for (std::size_t p : used) {
+  const bool move_points = mesh.dim == 3 && all_points;
+  if (!move_points)
+    mesh.coords.reserve(used.size() * std::size_t(mesh.dim));
+  for (VertexId p : used) {
     double x[4] = {g.points[3 * p], g.points[3 * p + 1], g.points[3 * p + 2], 0};
     if (four)
       x[3] = t->values[p];
@@ -372,20 +383,23 @@ Mesh grid_to_mesh(const std::string &path, const vtu::Grid &g) {
     if (mesh.dim == 2 && x[2] != 0.0)
       throw InputError(path, "surface mesh in 3D not supported (point " + std::to_string(p) +
                                  " of a triangle has z = " + std::to_string(x[2]) + ")");
-    mesh.coords.insert(mesh.coords.end(), x, x + mesh.dim);
+    if (!move_points)
+      mesh.coords.insert(mesh.coords.end(), x, x + mesh.dim);
   }
+  if (move_points)
+    mesh.coords = std::move(g.points); // x, y, z of every point, in order
 
   // Numeric point and cell arrays; "t" of the 4D convention is a coordinate.
   for (std::size_t i = 0; i < g.point_data.size(); ++i) {
-    const vtu::Array &a = g.point_data[i];
+    vtu::Array &a = g.point_data[i];
     if ((four && &a == t) || !a.numeric)
       continue;
-    mesh.point_data.push_back(copy_rows(a, array_name(a, i), used));
+    mesh.point_data.push_back(take_rows(a, array_name(a, i), used, all_points));
   }
   for (std::size_t i = 0; i < g.cell_data.size(); ++i) {
-    const vtu::Array &a = g.cell_data[i];
+    vtu::Array &a = g.cell_data[i];
     if (a.numeric)
-      mesh.cell_data.push_back(copy_rows(a, array_name(a, i), kept.ids));
+      mesh.cell_data.push_back(take_rows(a, array_name(a, i), kept.ids, all_cells));
   }
   return mesh;
 }

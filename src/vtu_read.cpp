@@ -40,6 +40,11 @@
 #include <string_view>
 #include <type_traits>
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 namespace bisect::vtu {
 namespace {
 
@@ -526,7 +531,8 @@ public:
     }
   }
 
-  // n contiguous bytes: the file itself when raw, else decoded into scratch.
+  // n contiguous bytes: the file itself when raw, else decoded into scratch
+  // (which only grows, so that one buffer serves all arrays).
   const unsigned char *view(std::size_t n, std::vector<unsigned char> &scratch, const char *what) {
     if (raw_) {
       if (std::uint64_t(end_ - p_) < n)
@@ -535,7 +541,8 @@ public:
       p_ += n;
       return v;
     }
-    scratch.resize(n);
+    if (scratch.size() < n)
+      scratch.resize(n);
     read(scratch.data(), n, what);
     return scratch.data();
   }
@@ -666,24 +673,32 @@ public:
 
   std::uint64_t size() const { return size_; }
 
-  void fill(unsigned char *out) {
+  // Hands the decoded bytes to put(bytes, n) in order, a block (or a
+  // chunk of base64) at a time: the buffers stay small and are reused, as
+  // fresh memory costs a page fault per page.
+  template <class Put> void fill(Put &&put, std::vector<unsigned char> &in_buf,
+                                 std::vector<unsigned char> &out_buf) {
     if (f_.compressor == Compressor::None) {
-      src_.read(out, std::size_t(size_), "data");
+      constexpr std::uint64_t kChunk = 3 << 16;
+      for (std::uint64_t done = 0; done < size_;) {
+        const std::size_t n = std::size_t(std::min(kChunk, size_ - done));
+        put(src_.view(n, in_buf, "data"), n);
+        done += n;
+      }
       return;
     }
-    std::vector<unsigned char> scratch;
-    const unsigned char *in = src_.view(std::size_t(compressed_), scratch, "compressed data");
     const std::uint64_t ratio = max_expansion(f_.compressor);
-    std::uint64_t done = 0;
     for (std::size_t b = 0; b < sizes_.size(); ++b) {
       const std::uint64_t n = b + 1 == sizes_.size() && last_ ? last_ : block_;
       if (n > sizes_[b] * ratio + (std::uint64_t(1) << 16))
         src_.fail("compression header: block " + str(b) + " of " + str(sizes_[b]) +
                   " bytes cannot hold " + str(n) + " bytes");
-      decompress_block(src_, f_.compressor, in, std::size_t(sizes_[b]), out + done,
+      const unsigned char *in = src_.view(std::size_t(sizes_[b]), in_buf, "compressed data");
+      if (out_buf.size() < n)
+        out_buf.resize(std::size_t(n));
+      decompress_block(src_, f_.compressor, in, std::size_t(sizes_[b]), out_buf.data(),
                        std::size_t(n), b);
-      in += sizes_[b];
-      done += n;
+      put(out_buf.data(), std::size_t(n));
     }
   }
 
@@ -704,16 +719,23 @@ template <class T> T load(const unsigned char *p, bool swap) {
   return v;
 }
 
-// Converts n values of type S at `src` into `out`. Integers for D =
-// int64_t must fit (UInt64 above INT64_MAX does not).
+// Converts n values of type S at `src` into `out` (value `first` of the
+// array onwards). Integers for D = int64_t must fit (UInt64 above
+// INT64_MAX does not).
 template <class D, class S>
-void convert_from(const unsigned char *src, std::size_t n, bool swap, D *out,
+void convert_from(const unsigned char *src, std::size_t n, bool swap, D *out, std::size_t first,
                   const ByteSource &fail_to) {
+  if constexpr (std::is_same_v<D, S>) {
+    if (!swap) {
+      std::memcpy(out, src, n * sizeof(S));
+      return;
+    }
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const S v = load<S>(src + i * sizeof(S), swap);
     if constexpr (std::is_same_v<D, std::int64_t> && std::is_same_v<S, std::uint64_t>) {
       if (v > std::uint64_t(INT64_MAX))
-        fail_to.fail("value " + str(i) + " (" + str(v) + ") is out of range");
+        fail_to.fail("value " + str(first + i) + " (" + str(v) + ") is out of range");
     }
     out[i] = static_cast<D>(v);
   }
@@ -721,27 +743,61 @@ void convert_from(const unsigned char *src, std::size_t n, bool swap, D *out,
 
 template <class D>
 void convert(Scalar t, const unsigned char *src, std::size_t n, bool swap, D *out,
-             const ByteSource &f) {
+             std::size_t first, const ByteSource &f) {
   switch (t) {
-  case Scalar::Int8: return convert_from<D, std::int8_t>(src, n, swap, out, f);
-  case Scalar::UInt8: return convert_from<D, std::uint8_t>(src, n, swap, out, f);
-  case Scalar::Int16: return convert_from<D, std::int16_t>(src, n, swap, out, f);
-  case Scalar::UInt16: return convert_from<D, std::uint16_t>(src, n, swap, out, f);
-  case Scalar::Int32: return convert_from<D, std::int32_t>(src, n, swap, out, f);
-  case Scalar::UInt32: return convert_from<D, std::uint32_t>(src, n, swap, out, f);
-  case Scalar::Int64: return convert_from<D, std::int64_t>(src, n, swap, out, f);
-  case Scalar::UInt64: return convert_from<D, std::uint64_t>(src, n, swap, out, f);
+  case Scalar::Int8: return convert_from<D, std::int8_t>(src, n, swap, out, first, f);
+  case Scalar::UInt8: return convert_from<D, std::uint8_t>(src, n, swap, out, first, f);
+  case Scalar::Int16: return convert_from<D, std::int16_t>(src, n, swap, out, first, f);
+  case Scalar::UInt16: return convert_from<D, std::uint16_t>(src, n, swap, out, first, f);
+  case Scalar::Int32: return convert_from<D, std::int32_t>(src, n, swap, out, first, f);
+  case Scalar::UInt32: return convert_from<D, std::uint32_t>(src, n, swap, out, first, f);
+  case Scalar::Int64: return convert_from<D, std::int64_t>(src, n, swap, out, first, f);
+  case Scalar::UInt64: return convert_from<D, std::uint64_t>(src, n, swap, out, first, f);
   case Scalar::Float32:
     if constexpr (std::is_same_v<D, double>)
-      return convert_from<D, float>(src, n, swap, out, f);
+      return convert_from<D, float>(src, n, swap, out, first, f);
     break;
   case Scalar::Float64:
     if constexpr (std::is_same_v<D, double>)
-      return convert_from<D, double>(src, n, swap, out, f);
+      return convert_from<D, double>(src, n, swap, out, first, f);
     break;
   }
   f.fail("internal: float data for an integer array");
 }
+
+// Converts bytes handed over in pieces of any length (a value may straddle
+// two pieces) into out[0, n).
+template <class D> class Converter {
+public:
+  Converter(Scalar t, bool swap, D *out, const ByteSource &f)
+      : t_(t), size_(std::size_t(info(t).size)), swap_(swap), out_(out), f_(f) {}
+
+  void operator()(const unsigned char *p, std::size_t n) {
+    if (carried_) {
+      const std::size_t take = std::min(n, size_ - carried_);
+      std::memcpy(carry_ + carried_, p, take);
+      carried_ += take, p += take, n -= take;
+      if (carried_ < size_)
+        return;
+      convert<D>(t_, carry_, 1, swap_, out_ + done_, done_, f_);
+      ++done_, carried_ = 0;
+    }
+    const std::size_t whole = n / size_;
+    convert<D>(t_, p, whole, swap_, out_ + done_, done_, f_);
+    done_ += whole;
+    carried_ = n - whole * size_;
+    std::memcpy(carry_, p + whole * size_, carried_);
+  }
+
+private:
+  Scalar t_;
+  std::size_t size_;
+  bool swap_;
+  D *out_;
+  const ByteSource &f_;
+  std::size_t done_ = 0, carried_ = 0;
+  unsigned char carry_[8] = {};
+};
 
 // ASCII values: tokens separated by whitespace; each must be a number of
 // the array's type (an integer in range for integer types).
@@ -899,21 +955,16 @@ private:
     if (expected != kAnyCount && n != expected)
       src.fail("holds " + str(n) + " values (" + str(bytes) + " bytes), expected " + str(expected));
     std::vector<D> out(static_cast<std::size_t>(n));
-    const bool direct = !f_.swap && ((std::is_same_v<D, double> && a.type == Scalar::Float64) ||
-                                     (std::is_same_v<D, std::int64_t> && a.type == Scalar::Int64));
-    if (direct) {
-      payload.fill(reinterpret_cast<unsigned char *>(out.data()));
-    } else {
-      std::vector<unsigned char> raw(static_cast<std::size_t>(bytes));
-      payload.fill(raw.data());
-      convert<D>(a.type, raw.data(), std::size_t(n), f_.swap, out.data(), src);
-    }
+    payload.fill(Converter<D>(a.type, f_.swap, out.data(), src), in_buf_, out_buf_);
     return out;
   }
 
   const std::string &path_;
   const Document &doc_;
   const FileFormat &f_;
+  // Block buffers reused from array to array: fresh memory costs a page
+  // fault per page, a large part of the reading time.
+  mutable std::vector<unsigned char> in_buf_, out_buf_;
 };
 
 // ---------------------------------------------------------------------------
@@ -1258,25 +1309,54 @@ Grid parse_grid(const std::string &path, const char *data, std::size_t size) {
   return GridReader(path, doc).read();
 }
 
-Grid read_grid(const std::string &path) {
-  std::FILE *f = std::fopen(path.c_str(), "rb");
-  if (!f)
-    throw InputError(path, std::string("cannot open: ") + std::strerror(errno));
-  std::string bytes;
-  char buffer[1 << 16];
-  if (std::fseek(f, 0, SEEK_END) == 0) {
-    const long n = std::ftell(f);
-    if (n > 0)
-      bytes.reserve(std::size_t(n));
-    std::fseek(f, 0, SEEK_SET);
+namespace {
+
+// The file mapped into memory (read-only; parsing never copies it).
+class MappedFile {
+public:
+  explicit MappedFile(const std::string &path) {
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0)
+      throw InputError(path, std::string("cannot open: ") + std::strerror(errno));
+    struct stat st;
+    if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
+      ::close(fd_);
+      throw InputError(path, "not a regular file");
+    }
+    size_ = std::size_t(st.st_size);
+    if (size_ == 0)
+      return;
+    // MAP_POPULATE: the pages are mapped in one go rather than one fault
+    // at a time.
+    void *p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd_, 0);
+    if (p == MAP_FAILED) {
+      const int err = errno;
+      ::close(fd_);
+      throw InputError(path, std::string("cannot read: ") + std::strerror(err));
+    }
+    data_ = static_cast<const char *>(p);
   }
-  for (std::size_t got; (got = std::fread(buffer, 1, sizeof buffer, f)) > 0;)
-    bytes.append(buffer, got);
-  const bool error = std::ferror(f);
-  std::fclose(f);
-  if (error)
-    throw InputError(path, "read error");
-  return parse_grid(path, bytes.data(), bytes.size());
+  ~MappedFile() {
+    if (data_)
+      ::munmap(const_cast<char *>(data_), size_);
+    ::close(fd_);
+  }
+  MappedFile(const MappedFile &) = delete;
+  MappedFile &operator=(const MappedFile &) = delete;
+  const char *data() const { return data_ ? data_ : ""; }
+  std::size_t size() const { return size_; }
+
+private:
+  int fd_ = -1;
+  const char *data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
+} // namespace
+
+Grid read_grid(const std::string &path) {
+  const MappedFile file(path);
+  return parse_grid(path, file.data(), file.size());
 }
 
 } // namespace bisect::vtu
