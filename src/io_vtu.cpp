@@ -174,7 +174,7 @@ struct CellKind {
 
 constexpr int kPolyVertex = 2, kTriangle = 5, kTetra = 10, kConvexPointSet = 41;
 
-const CellKind *linear_cell(std::int64_t type) {
+const CellKind *linear_cell(int type) {
   static const CellKind kinds[] = {
       {"empty cell", -1, 0, false},      {"vertex", 0, 1, false},
       {"poly-vertex", 0, 1, true},       {"line", 1, 2, false},
@@ -200,7 +200,7 @@ const CellKind *linear_cell(std::int64_t type) {
 // cell of the file is dropped without a reason.
 void check_cell_types(const std::string &path, const vtu::Grid &g) {
   for (std::size_t c = 0; c < g.num_cells; ++c) {
-    const std::int64_t type = g.types[c];
+    const int type = g.types[c];
     const std::int64_t n = g.offsets[c + 1] - g.offsets[c];
     const CellKind *kind = linear_cell(type);
     const std::string cell = "cell " + std::to_string(c);
@@ -243,7 +243,7 @@ struct KeptCells {
 KeptCells select_cells_4d(const std::string &path, const vtu::Grid &g) {
   KeptCells kept{4, {}};
   for (std::size_t c = 0; c < g.num_cells; ++c) {
-    const std::int64_t type = g.types[c];
+    const int type = g.types[c];
     const std::int64_t npts = g.offsets[c + 1] - g.offsets[c];
     if (type == kPolyVertex || type == kConvexPointSet) {
       if (npts != 5)
@@ -284,7 +284,7 @@ KeptCells select_cells(const std::string &path, const vtu::Grid &g) {
   KeptCells kept{dim, {}};
   kept.ids.reserve(g.num_cells);
   for (std::size_t c = 0; c < g.num_cells; ++c) {
-    const std::int64_t type = g.types[c];
+    const int type = g.types[c];
     if (type == simplex)
       kept.ids.push_back(CellId(c));
     else if (linear_cell(type)->dim >= dim)
@@ -340,13 +340,13 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
   const int nvc = kept.dim + 1;
   std::vector<VertexId> new_id(np, kNoVertex);
   for (CellId c : kept.ids) {
-    const std::int64_t *pts = g.connectivity.data() + g.offsets[c];
+    const std::uint32_t *pts = g.connectivity.data() + g.offsets[c];
     for (int i = 0; i < nvc; ++i) {
       for (int j = 0; j < i; ++j)
         if (pts[j] == pts[i])
           throw InputError(path, "cell " + std::to_string(c) + " repeats point " +
                                      std::to_string(pts[i]));
-      new_id[std::size_t(pts[i])] = 0; // used
+      new_id[pts[i]] = 0; // used
     }
   }
   std::vector<VertexId> used; // file ids of the kept points, in order
@@ -360,14 +360,19 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
 
   Mesh mesh;
   mesh.dim = kept.dim;
-  mesh.cells.resize(kept.ids.size() * std::size_t(nvc));
-  VertexId *to = mesh.cells.data();
-  for (CellId c : kept.ids) {
-    const std::int64_t *pts = g.connectivity.data() + g.offsets[c];
-    for (int i = 0; i < nvc; ++i)
-      *to++ = new_id[std::size_t(pts[i])];
+  if (all_points && all_cells) {
+    // Every cell kept, every point used in file order: the ids stay as they are.
+    mesh.cells = std::move(g.connectivity);
+  } else {
+    mesh.cells.resize(kept.ids.size() * std::size_t(nvc));
+    VertexId *to = mesh.cells.data();
+    for (CellId c : kept.ids) {
+      const std::uint32_t *pts = g.connectivity.data() + g.offsets[c];
+      for (int i = 0; i < nvc; ++i)
+        *to++ = new_id[pts[i]];
+    }
+    g.connectivity = {}; // done with: free it before the arrays are copied
   }
-  g.connectivity = {}; // done with: free it before the arrays are copied
 
   // Coordinates: (x, y) in 2D, (x, y, z) in 3D, (x, y, z, t) in 4D.
   const bool move_points = mesh.dim == 3 && all_points;

@@ -505,14 +505,28 @@ struct FileFormat {
   Compressor compressor = Compressor::None;
 };
 
+// The first point id of an array that is no point id at all (negative, or
+// past 32 bits): such ids are stored as kBadId and reported by the cell
+// check, which knows the cell, with this text.
+constexpr std::uint32_t kBadId = kNoVertex;
+struct BadIds {
+  bool any = false;
+  std::string first;
+};
+
 // The encoded bytes of one binary array: a span of the file (raw appended)
 // or base64 text (inline, or base64 appended).
 class ByteSource {
 public:
-  ByteSource(const std::string &path, const ArraySpec &a, const char *raw, const char *end)
-      : path_(path), a_(a), raw_(true), p_(raw), end_(end), b64_(nullptr, nullptr) {}
-  ByteSource(const std::string &path, const ArraySpec &a, Base64 b64)
-      : path_(path), a_(a), raw_(false), b64_(b64) {}
+  ByteSource(const std::string &path, const ArraySpec &a, BadIds *bad, const char *raw,
+             const char *end)
+      : path_(path), a_(a), bad_(bad), raw_(true), p_(raw), end_(end), b64_(nullptr, nullptr) {}
+  ByteSource(const std::string &path, const ArraySpec &a, BadIds *bad, Base64 b64)
+      : path_(path), a_(a), bad_(bad), raw_(false), b64_(b64) {}
+
+  const std::string &path() const { return path_; }
+  const std::string &label() const { return a_.label; }
+  BadIds *bad_ids() const { return bad_; }
 
   std::uint64_t max_left() const { return raw_ ? std::uint64_t(end_ - p_) : b64_.max_left(); }
 
@@ -569,6 +583,7 @@ public:
 private:
   const std::string &path_;
   const ArraySpec &a_;
+  BadIds *bad_;
   bool raw_;
   const char *p_ = nullptr, *end_ = nullptr;
   Base64 b64_;
@@ -709,6 +724,41 @@ private:
   std::vector<std::uint64_t> sizes_;
 };
 
+// What an integer of the file becomes in an array of D: doubles (data),
+// int64 (offsets), uint32 (point ids: at most kBadId, see BadIds), uint8
+// (cell types: a type past 255 is an error here).
+template <class D, class V>
+D narrow(V v, std::uint64_t index, const std::string &label, const std::string &path,
+         BadIds *bad) {
+  if constexpr (std::is_same_v<D, double>) {
+    return static_cast<double>(v);
+  } else if constexpr (std::is_same_v<D, std::int64_t>) {
+    if constexpr (std::is_same_v<V, std::uint64_t>)
+      if (v > std::uint64_t(INT64_MAX))
+        throw InputError(path, label + ": value " + str(index) + " (" + std::to_string(v) +
+                                   ") is out of range");
+    return static_cast<std::int64_t>(v);
+  } else if constexpr (std::is_same_v<D, std::uint32_t>) {
+    bool ok = true;
+    if constexpr (std::is_signed_v<V>)
+      ok = v >= 0;
+    if (ok && std::uint64_t(v) < kBadId)
+      return static_cast<std::uint32_t>(v);
+    if (bad && !bad->any)
+      bad->any = true, bad->first = std::to_string(v);
+    return kBadId;
+  } else {
+    static_assert(std::is_same_v<D, std::uint8_t>);
+    bool ok = std::uint64_t(v) <= 255;
+    if constexpr (std::is_signed_v<V>)
+      ok = v >= 0 && v <= 255;
+    if (!ok)
+      throw InputError(path, label + ": cell " + str(index) + " has VTK type " +
+                                 std::to_string(v) + ", which is not a known linear cell type");
+    return static_cast<std::uint8_t>(v);
+  }
+}
+
 template <class T> T load(const unsigned char *p, bool swap) {
   unsigned char b[sizeof(T)];
   std::memcpy(b, p, sizeof(T));
@@ -720,25 +770,19 @@ template <class T> T load(const unsigned char *p, bool swap) {
 }
 
 // Converts n values of type S at `src` into `out` (value `first` of the
-// array onwards). Integers for D = int64_t must fit (UInt64 above
-// INT64_MAX does not).
+// array onwards; see narrow).
 template <class D, class S>
 void convert_from(const unsigned char *src, std::size_t n, bool swap, D *out, std::size_t first,
-                  const ByteSource &fail_to) {
+                  const ByteSource &f) {
   if constexpr (std::is_same_v<D, S>) {
     if (!swap) {
       std::memcpy(out, src, n * sizeof(S));
       return;
     }
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    const S v = load<S>(src + i * sizeof(S), swap);
-    if constexpr (std::is_same_v<D, std::int64_t> && std::is_same_v<S, std::uint64_t>) {
-      if (v > std::uint64_t(INT64_MAX))
-        fail_to.fail("value " + str(first + i) + " (" + str(v) + ") is out of range");
-    }
-    out[i] = static_cast<D>(v);
-  }
+  for (std::size_t i = 0; i < n; ++i)
+    out[i] = narrow<D>(load<S>(src + i * sizeof(S), swap), first + i, f.label(), f.path(),
+                       f.bad_ids());
 }
 
 template <class D>
@@ -802,7 +846,8 @@ private:
 // ASCII values: tokens separated by whitespace; each must be a number of
 // the array's type (an integer in range for integer types).
 template <class D>
-std::vector<D> parse_ascii(const std::string &path, const ArraySpec &a, std::uint64_t expected) {
+std::vector<D> parse_ascii(const std::string &path, const ArraySpec &a, std::uint64_t expected,
+                           BadIds *bad_ids) {
   auto fail = [&](const std::string &what) -> void { throw InputError(path, a.label + ": " + what); };
   std::size_t chars = 0;
   for (auto t : a.element->text)
@@ -851,7 +896,8 @@ std::vector<D> parse_ascii(const std::string &path, const ArraySpec &a, std::uin
           if (std::isinf(v))
             bad("out of range for");
         }
-        value = static_cast<D>(v);
+        if constexpr (std::is_same_v<D, double>) // integer targets take integer arrays only
+          value = v;
       } else if (a.type == Scalar::UInt64) {
         std::uint64_t v = 0;
         const auto r = std::from_chars(b, p, v);
@@ -859,10 +905,7 @@ std::vector<D> parse_ascii(const std::string &path, const ArraySpec &a, std::uin
           bad("not an integer of type");
         if (r.ec != std::errc())
           bad("out of range for");
-        if constexpr (std::is_same_v<D, std::int64_t>)
-          if (v > std::uint64_t(INT64_MAX))
-            fail("value " + str(index) + " (" + quoted(token) + ") is out of range");
-        value = static_cast<D>(v);
+        value = narrow<D>(v, index, a.label, path, bad_ids);
       } else {
         std::int64_t v = 0;
         const auto r = std::from_chars(b, p, v);
@@ -871,7 +914,7 @@ std::vector<D> parse_ascii(const std::string &path, const ArraySpec &a, std::uin
         const auto [lo, hi] = int_range(a.type);
         if (r.ec != std::errc() || v < lo || v > hi)
           bad("out of range for");
-        value = static_cast<D>(v);
+        value = narrow<D>(v, index, a.label, path, bad_ids);
       }
       out.push_back(value);
       ++index;
@@ -908,17 +951,18 @@ public:
 
   // The values of `a`: `expected` of them (kAnyCount: as many as the data
   // holds, a whole number of tuples).
-  template <class D> std::vector<D> read(const ArraySpec &a, std::uint64_t expected) const {
-    if (std::is_same_v<D, std::int64_t> && !info(a.type).integer)
+  template <class D>
+  std::vector<D> read(const ArraySpec &a, std::uint64_t expected, BadIds *bad = nullptr) const {
+    if (!std::is_same_v<D, double> && !info(a.type).integer)
       throw InputError(path_, a.label + " has type " + std::string(info(a.type).name) +
                                   ", expected an integer type");
     std::vector<D> out;
     if (a.format == Format::Ascii) {
-      out = parse_ascii<D>(path_, a, expected);
+      out = parse_ascii<D>(path_, a, expected, bad);
     } else if (a.format == Format::Binary) {
       std::string joined;
       const std::string_view text = binary_text(path_, a, joined);
-      ByteSource src(path_, a, Base64(text.data(), text.data() + text.size()));
+      ByteSource src(path_, a, bad, Base64(text.data(), text.data() + text.size()));
       out = read_binary<D>(src, a, expected);
     } else {
       if (!doc_.appended_begin)
@@ -930,10 +974,10 @@ public:
                                     (doc_.appended_base64 ? " characters)" : " bytes)"));
       const char *at = doc_.appended_begin + a.offset;
       if (doc_.appended_base64) {
-        ByteSource src(path_, a, Base64(at, doc_.appended_end));
+        ByteSource src(path_, a, bad, Base64(at, doc_.appended_end));
         out = read_binary<D>(src, a, expected);
       } else {
-        ByteSource src(path_, a, at, doc_.appended_end);
+        ByteSource src(path_, a, bad, at, doc_.appended_end);
         out = read_binary<D>(src, a, expected);
       }
     }
@@ -1191,6 +1235,8 @@ private:
     const std::string where = count > 1 ? "piece " + str(index) : "<Piece>";
     const std::uint64_t np = parse_count(path_, piece, "NumberOfPoints", where, std::nullopt);
     const std::uint64_t nc = parse_count(path_, piece, "NumberOfCells", where, std::nullopt);
+    if (np >= kNoVertex)
+      fail(at + "too many points (" + str(np) + ")");
 
     // Points first: their size checks NumberOfPoints against the file.
     std::vector<double> points;
@@ -1213,7 +1259,10 @@ private:
       points = arrays_.read<double>(a, times(np, 3));
     }
 
-    std::vector<std::int64_t> conn, offsets, types;
+    std::vector<std::uint32_t> conn;
+    std::vector<std::int64_t> offsets;
+    std::vector<std::uint8_t> types;
+    BadIds bad_ids;
     if (const Element *cells = child(piece, "Cells")) {
       const ArraySpec *sc = nullptr, *so = nullptr, *st = nullptr;
       const std::vector<ArraySpec> cs = specs(*cells, "Cells", at);
@@ -1226,21 +1275,21 @@ private:
         fail(at + "<Cells> has no '" + (!sc ? "connectivity" : !so ? "offsets" : "types") +
              "' array");
       if (st)
-        types = arrays_.read<std::int64_t>(*st, nc);
+        types = arrays_.read<std::uint8_t>(*st, nc);
       if (so)
         offsets = arrays_.read<std::int64_t>(*so, nc);
       if (sc)
-        conn = arrays_.read<std::int64_t>(*sc, kAnyCount);
+        conn = arrays_.read<std::uint32_t>(*sc, kAnyCount, &bad_ids);
     } else if (nc > 0) {
       fail(at + "the piece is missing its Cells");
     }
-    check_cells(at, g.num_cells, np, conn, offsets);
+    check_cells(at, g.num_cells, np, conn, offsets, bad_ids);
 
     std::vector<Array> pd = read_data(child(piece, "PointData"), "point data", at, np);
     std::vector<Array> cd = read_data(child(piece, "CellData"), "cell data", at, nc);
 
     // Concatenate, point ids and offsets shifted past the earlier pieces.
-    const auto point_base = std::int64_t(g.num_points);
+    const auto point_base = std::uint32_t(g.num_points);
     const auto conn_base = std::int64_t(g.connectivity.size());
     if (index == 0)
       g.offsets.push_back(0);
@@ -1252,10 +1301,13 @@ private:
       else
         g.connectivity.insert(g.connectivity.end(), conn.begin(), conn.end());
     } else {
-      for (std::int64_t id : conn)
-        g.connectivity.push_back(id + point_base);
+      for (std::uint32_t id : conn)
+        g.connectivity.push_back(id + point_base); // below kNoVertex: checked
     }
-    g.types.insert(g.types.end(), types.begin(), types.end());
+    if (g.types.empty())
+      g.types = std::move(types);
+    else
+      g.types.insert(g.types.end(), types.begin(), types.end());
     if (g.points.empty())
       g.points = std::move(points);
     else
@@ -1271,8 +1323,8 @@ private:
   // Offsets end each cell: non-decreasing, within the connectivity, the last
   // at its end; every point id within the piece.
   void check_cells(const std::string &at, std::size_t first_cell, std::uint64_t np,
-                   const std::vector<std::int64_t> &conn,
-                   const std::vector<std::int64_t> &offsets) const {
+                   const std::vector<std::uint32_t> &conn,
+                   const std::vector<std::int64_t> &offsets, const BadIds &bad) const {
     std::int64_t start = 0;
     const auto size = std::int64_t(conn.size());
     for (std::size_t c = 0; c < offsets.size(); ++c) {
@@ -1286,9 +1338,11 @@ private:
         fail(at + "Cells array 'offsets': " + cell + " ends at " + std::to_string(end) +
              ", past the end of the connectivity (" + std::to_string(size) + " ids)");
       for (std::int64_t k = start; k < end; ++k)
-        if (conn[std::size_t(k)] < 0 || std::uint64_t(conn[std::size_t(k)]) >= np)
-          fail(at + cell + " refers to point " + std::to_string(conn[std::size_t(k)]) +
+        if (conn[std::size_t(k)] >= np) {
+          const std::uint32_t id = conn[std::size_t(k)];
+          fail(at + cell + " refers to point " + (id == kBadId ? bad.first : str(id)) +
                ", but there are " + str(np) + " points");
+        }
       start = end;
     }
     if (start != size)

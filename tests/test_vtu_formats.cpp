@@ -403,8 +403,12 @@ TEST_CASE("vtu formats: integer arrays hold integers of their type, named in the
 
 TEST_CASE("vtu formats: sizes claimed far beyond the file are refused before allocating",
           "[io]") {
+  CHECK_THAT(read_error(triangle_file("", "", "NumberOfPoints='4000000000' NumberOfCells='1'")),
+             Catch::Contains("Points: has 9 values, expected 12000000000"));
   CHECK_THAT(read_error(triangle_file("", "", "NumberOfPoints='3000000000000' NumberOfCells='1'")),
-             Catch::Contains("Points: has 9 values, expected 9000000000000"));
+             Catch::Contains("too many points (3000000000000)"));
+  CHECK_THAT(read_error(triangle_file("", "", "NumberOfPoints='3' NumberOfCells='100000000000'")),
+             Catch::Contains("Cells array 'types': has 1 values, expected 100000000000"));
   // An uncompressed inline array whose header claims 2^62 bytes.
   const std::string huge = "AAAAAAAAAEA="; // base64 of the UInt64 2^62, little-endian
   std::string text = triangle_file("", "<DataArray type='Int32' Name='m' format='binary'>" + huge +
