@@ -37,6 +37,7 @@
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <set>
 #include <string_view>
 #include <type_traits>
 
@@ -275,6 +276,10 @@ private:
       if (!close)
         fail(k, "the file ends inside the value of attribute " + std::string(name));
       const std::size_t ve = std::size_t(close - s_);
+      // VTK's elements have a handful of attributes; the limit keeps the
+      // check for repeated ones cheap on hostile input.
+      if (el.attributes.size() == 256)
+        fail(k, "more than 256 attributes in <" + std::string(el.name) + ">");
       if (el.attribute(name))
         fail(k, "attribute " + std::string(name) + " given twice");
       el.attributes.push_back({name, decode_entities(k, std::string_view(s_ + k + 1, ve - k - 1))});
@@ -927,7 +932,7 @@ std::vector<D> parse_ascii(const std::string &path, const ArraySpec &a, std::uin
 
 // The character data of a binary DataArray: its one non-blank text piece
 // (child elements such as InformationKey may split it).
-std::string_view binary_text(const std::string &path, const ArraySpec &a, std::string &joined) {
+std::string_view binary_text(const ArraySpec &a, std::string &joined) {
   std::string_view found;
   int pieces = 0;
   for (auto t : a.element->text)
@@ -937,7 +942,6 @@ std::string_view binary_text(const std::string &path, const ArraySpec &a, std::s
     }
   if (pieces <= 1)
     return found;
-  (void)path;
   joined.clear();
   for (auto t : a.element->text)
     joined.append(t);
@@ -961,14 +965,14 @@ public:
       out = parse_ascii<D>(path_, a, expected, bad);
     } else if (a.format == Format::Binary) {
       std::string joined;
-      const std::string_view text = binary_text(path_, a, joined);
+      const std::string_view text = binary_text(a, joined);
       ByteSource src(path_, a, bad, Base64(text.data(), text.data() + text.size()));
       out = read_binary<D>(src, a, expected);
     } else {
       if (!doc_.appended_begin)
         throw InputError(path_, a.label + " is appended, but the file has no <AppendedData>");
       const std::uint64_t avail = std::uint64_t(doc_.appended_end - doc_.appended_begin);
-      if (a.offset >= avail && !(a.offset == avail && false))
+      if (a.offset >= avail) // even an empty array has a header
         throw InputError(path_, a.label + ": offset " + str(a.offset) +
                                     " is past the end of the appended data (" + str(avail) +
                                     (doc_.appended_base64 ? " characters)" : " bytes)"));
@@ -1158,6 +1162,7 @@ private:
   std::vector<ArraySpec> specs(const Element &section, const std::string &what,
                                const std::string &piece) const {
     std::vector<ArraySpec> out;
+    std::set<std::string_view> names;
     for (std::size_t c : section.children) {
       const Element &e = doc_.elements[c];
       if (e.name != "DataArray")
@@ -1166,9 +1171,10 @@ private:
       const std::string label = piece + what + " array " +
                                 (n && !n->empty() ? quoted(*n) : std::to_string(out.size()) + " (unnamed)");
       out.push_back(spec(e, label));
-      for (std::size_t k = 0; k + 1 < out.size(); ++k)
-        if (!out.back().name.empty() && out[k].name == out.back().name)
-          fail(piece + "two " + what + " arrays named " + quoted(out.back().name));
+      // Two arrays of one name would be one array in VTK (the later replaces
+      // the earlier): refused as ambiguous.
+      if (n && !n->empty() && !names.insert(*n).second)
+        fail(piece + "two " + what + " arrays named " + quoted(*n));
     }
     return out;
   }
