@@ -895,7 +895,6 @@ std::vector<D> parse_ascii(const std::string &path, const ArraySpec &a, std::uin
         if (r.ec == std::errc::result_out_of_range) {
           // Underflow to a subnormal or zero is a value; overflow is not.
           const std::string copy(b, p);
-          errno = 0;
           v = a.type == Scalar::Float32 ? double(std::strtof(copy.c_str(), nullptr))
                                         : std::strtod(copy.c_str(), nullptr);
           if (std::isinf(v))

@@ -21,6 +21,7 @@
 #include <vtkSmartPointer.h>
 #include <vtkStringArray.h>
 #include <vtkTypeInt64Array.h>
+#include <vtkTypeUInt32Array.h>
 #include <vtkTypeUInt64Array.h>
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnsignedShortArray.h>
@@ -165,6 +166,7 @@ Case make_case(int dim, bool float_points) {
   cd->AddArray(typed_array<vtkTypeInt64Array>("i64", 1, {-1099511627776.0, 42}, &m.cell_data));
   cd->AddArray(typed_array<vtkUnsignedShortArray>("u16", 1, {65535, 0}, &m.cell_data));
   cd->AddArray(typed_array<vtkUnsignedCharArray>("u8", 1, {255, 1}, &m.cell_data));
+  cd->AddArray(typed_array<vtkTypeUInt32Array>("u32", 2, {4294967295.0, 0, 1, 2}, &m.cell_data));
   return c;
 }
 
