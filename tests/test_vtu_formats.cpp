@@ -28,6 +28,7 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -441,4 +442,27 @@ TEST_CASE("vtu formats: pieces with different arrays are refused", "[io]") {
   second.replace(second.find("Name='p'"), 8, "Name='q'");
   text.insert(e, second);
   CHECK_THAT(read_error(text), Catch::Contains("piece 1 has other point data arrays than piece 0"));
+}
+
+TEST_CASE("vtu formats: a corrupt lzma or zlib block is refused naming the array", "[io][3d]") {
+  for (int comp : {1, 3}) {
+    Settings s;
+    s.mode = Mode::Binary;
+    s.compressor = comp;
+    const Case c = make_case(3, false);
+    const std::string path = write_with_vtk(c, s, "corrupt.vtu");
+    std::string text = read_text(path);
+    // A character near the end of the connectivity's base64 text lies in
+    // the last compressed block (its checksum then fails).
+    const std::size_t array = text.find("Name=\"connectivity\"");
+    REQUIRE(array != std::string::npos);
+    std::size_t end = text.find('<', text.find('>', array));
+    while (text[end - 1] == '=' || std::isspace(static_cast<unsigned char>(text[end - 1])))
+      --end;
+    char &ch = text[end - 4];
+    ch = ch == 'A' ? 'B' : 'A';
+    INFO((comp == 1 ? "zlib" : "lzma"));
+    CHECK_THAT(read_error(text), Catch::Contains("Cells array 'connectivity': ") &&
+                                     Catch::Contains(comp == 1 ? "zlib block" : "lzma block"));
+  }
 }
