@@ -46,6 +46,9 @@ for b in "$ROOT"/build/bisect "$BUILD"/bisect; do
   fi
 done
 
+# Files written by VTK's own writer in every mode, when python3-vtk9 is there.
+/usr/bin/python3 "$ROOT/scripts/vtu_seeds.py" "$BUILD/corpus/fuzz_vtu" 2>/dev/null || true
+
 # Dictionaries help the text formats.
 cat >"$BUILD/msh.dict" <<'DICT'
 "$MeshFormat"

@@ -2,7 +2,8 @@
 # Installs the Debian packages bisect builds and tests with. Idempotent: a
 # no-op when everything is present. Runs as root (or through sudo).
 set -euo pipefail
-packages=(cmake g++ make libvtk9-dev libcli11-dev nlohmann-json3-dev catch2 libqhull-dev libmuparser-dev zlib1g-dev liblz4-dev python3-vtk9)
+packages=(cmake g++ make libvtk9-dev libcli11-dev nlohmann-json3-dev catch2 libqhull-dev libmuparser-dev
+          zlib1g-dev liblz4-dev liblzma-dev python3-meshio python3-vtk9)
 # Optional extras: gmsh (remaking data/), python3-matplotlib (PNG plots).
 [[ "${BISECT_WITH_PLOTS:-0}" == 1 ]] && packages+=(python3-matplotlib python3-numpy)
 [[ "${BISECT_WITH_GMSH:-0}" == 1 ]] && packages+=(gmsh)

@@ -1,0 +1,45 @@
+// Native reader of VTK XML unstructured grid files (.vtu): the XML subset
+// VTK and meshio write, and the array encodings (ascii, inline base64,
+// appended raw or base64; uncompressed, zlib, lz4 or lzma). No VTK code is
+// involved, so a corrupt file can only end in an InputError.
+//
+// The result is the file's content, pieces concatenated (point ids offset
+// per piece, as VTK does); which cells make the mesh is decided by the
+// caller (io_vtu.cpp).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace bisect::vtu {
+
+// A numeric DataArray as doubles (what vtkDataArray::GetComponent gives).
+// Non-numeric arrays (String, Bit) keep their place, name and no values, so
+// that unnamed arrays are numbered as VTK numbers them.
+struct Array {
+  std::string name; // as in the file; may be empty
+  int components = 1;
+  bool numeric = true;
+  std::vector<double> values; // tuples * components, component fastest
+};
+
+struct Grid {
+  std::size_t num_points = 0;
+  std::size_t num_cells = 0;
+  std::vector<double> points;             // x, y, z per point
+  std::vector<std::uint32_t> connectivity; // point ids (< num_points) of all cells
+  std::vector<std::int64_t> offsets;       // num_cells + 1 entries from 0: cell c uses
+                                           // connectivity[offsets[c], offsets[c + 1])
+  std::vector<std::uint8_t> types;         // VTK cell type per cell
+  std::vector<Array> point_data, cell_data, field_data;
+};
+
+// Reads `path`; throws InputError(path, one line) on anything it cannot
+// read exactly.
+Grid read_grid(const std::string &path);
+
+// Same, from bytes already in memory (`path` only names them in errors).
+Grid parse_grid(const std::string &path, const char *data, std::size_t size);
+
+} // namespace bisect::vtu
