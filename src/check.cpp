@@ -861,6 +861,23 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
   });
 }
 
+void for_each_interior_facet(const Mesh &mesh,
+                             const std::function<bool(CellId, int, CellId, int)> &visit) {
+  if (mesh.num_cells() == 0)
+    return;
+  dispatch(mesh.dim, [&]<int D>() {
+    constexpr int M = D + 1;
+    bool going = true;
+    for_each_subsimplex<D, D>(mesh, [&](const std::array<VertexId, D> &, const std::uint32_t *refs,
+                                        int count) {
+      if (!going || count != 2)
+        return;
+      going = visit(CellId(refs[0] / M), opposite_of_facet<D>(int(refs[0] % M)),
+                    CellId(refs[1] / M), opposite_of_facet<D>(int(refs[1] % M)));
+    });
+  });
+}
+
 void prepare_input(Mesh &mesh, const std::string &path) {
   if (std::string s = check_shape(mesh); !s.empty())
     throw InputError(path, s);

@@ -3,6 +3,7 @@
 
 #include "mesh.hpp"
 
+#include <functional>
 #include <string>
 
 namespace bisect {
@@ -43,6 +44,13 @@ struct CheckOptions {
 // measure (relative tolerance 1e-9) and Euler characteristic unchanged.
 CheckResult check_conformity(const Mesh &mesh, const Invariants *original = nullptr,
                              const CheckOptions &options = {});
+
+// Calls visit(a, i, b, j) once for every facet shared by exactly two cells:
+// cells a and b, and the local index (in each cell's tuple) of the vertex
+// opposite the facet. Facets come in increasing order of their sorted ids;
+// the walk stops when visit returns false.
+void for_each_interior_facet(const Mesh &mesh,
+                             const std::function<bool(CellId, int, CellId, int)> &visit);
 
 // Validates a freshly read mesh and orients every cell positively. Throws
 // InputError naming `path`: NaN/Inf coordinates, ids out of range, repeated

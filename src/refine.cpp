@@ -230,30 +230,11 @@ private:
   // Stage 1: x = (new vertices (t of them), old sub-simplex).
   void bisect_stage1(CellId c, const VertexId *x, int t) {
     VertexId c1[N], c2[N];
-    EdgePick e = consistent_edge(order_, x + t, N - t);
-    const int p = t + e.first, q = t + e.second;
-    VertexId z = midpoint(x[p], x[q]);
-    Stage child_stage = Stage::Opposite;
-    int child_tag = t + 1;
-    for (int which = 0; which < 2; ++which) {
-      VertexId *out = which == 0 ? c1 : c2;
-      const int drop = which == 0 ? p : q;
-      VertexId old[N];
-      int n_old = 0;
-      for (int i = t; i < N; ++i)
-        if (i != drop) old[n_old++] = x[i];
-      if (n_old == 3) { // the old part is a triangle: enter Maubach
-        triangle_tuple(order_, old, out);
-        out[3] = z;
-        for (int i = 0; i < t && 4 + i < N; ++i) out[4 + i] = x[i];
-        child_stage = Stage::Maubach;
-        child_tag = 2;
-      } else {
-        out[0] = z;
-        for (int i = 0; i < t && 1 + i < N; ++i) out[1 + i] = x[i];
-        std::copy(old, old + n_old, out + 1 + t);
-      }
-    }
+    const EdgePick e = opposite_edge(order_, x, Dim, t);
+    const VertexId z = midpoint(x[e.first], x[e.second]);
+    Stage child_stage;
+    int child_tag;
+    opposite_children(order_, x, Dim, t, e, z, c1, c2, child_stage, child_tag);
     std::copy(c1, c1 + N, m_.cell(c));
     m_.stage[c] = child_stage;
     m_.tag[c] = std::uint8_t(child_tag);
