@@ -286,8 +286,8 @@ int run_refine(const RefineArgs &a) {
 #else
   const bool check = a.check;
 #endif
-  Invariants before;
-  if (check) before = measure_invariants(mesh);
+  // Without --check, volume and boundary measure are enough for the final check.
+  const Invariants before = measure_invariants(mesh, check);
   int corrupt_after = 0; // the test hook, see corrupt_one_bisection
   if (const char *e = std::getenv("BISECT_TEST_CORRUPT_ITERATION")) corrupt_after = std::atoi(e);
 
@@ -366,6 +366,16 @@ int run_refine(const RefineArgs &a) {
   if (g_interrupted) {
     std::cerr << "bisect: interrupted; no output written\n";
     return kExitInterrupted;
+  }
+  // The final check, on by default (--check has checked every iteration in
+  // full): whatever went wrong, a non-conforming mesh is never written.
+  if (!check) {
+    CheckResult c = check_refined(mesh, before);
+    if (!c.ok) {
+      std::cerr << "bisect: internal check failed on the refined mesh: " << c.failure
+                << "; no output written\n";
+      return kExitCheck;
+    }
   }
   write_text_file(csv, rows.str());
   try {

@@ -796,7 +796,7 @@ bool relative_change(double before, double after) {
 
 } // namespace
 
-Invariants measure_invariants(const Mesh &mesh) {
+Invariants measure_invariants(const Mesh &mesh, bool euler) {
   if (mesh.num_cells() == 0)
     return {};
   return dispatch(mesh.dim, [&]<int D>() {
@@ -807,7 +807,8 @@ Invariants measure_invariants(const Mesh &mesh) {
     const FacetReport fr = facet_pass<D>(mesh, nullptr, false);
     inv.boundary_measure = fr.boundary_measure;
     inv.boundary_facets = fr.boundary_facets;
-    inv.euler = euler_characteristic<D>(mesh, fr.facets);
+    if (euler)
+      inv.euler = euler_characteristic<D>(mesh, fr.facets);
     return inv;
   });
 }
@@ -857,6 +858,45 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
         return fail("Euler characteristic changed: " + std::to_string(original->euler) + " -> " +
                     std::to_string(chi));
     }
+    return CheckResult{};
+  });
+}
+
+CheckResult check_refined(const Mesh &mesh, const Invariants &original) {
+  auto fail = [](std::string what) { return CheckResult{false, std::move(what)}; };
+  if (std::string s = check_shape(mesh); !s.empty())
+    return fail(s);
+  if (std::string s = check_ids(mesh); !s.empty())
+    return fail(s);
+  if (mesh.num_cells() == 0)
+    return CheckResult{};
+  return dispatch(mesh.dim, [&]<int D>() {
+    std::size_t bad;
+    double bad_volume = 0;
+    std::vector<std::int8_t> signs;
+    const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
+    if (bad != std::size_t(-1)) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%g", bad_volume);
+      return fail("cell " + std::to_string(bad) + " is degenerate (volume " + buf + ")");
+    }
+    const FacetReport fr = facet_pass<D>(mesh, &signs, true);
+    if (!fr.nonmanifold.empty())
+      return fail(fr.nonmanifold);
+    if (!fr.overlap.empty())
+      return fail(fr.overlap);
+    if (relative_change(original.volume, volume))
+      return fail(format("volume changed: %.10g -> %.10g (relative %.2g)", original.volume, volume,
+                         std::abs(volume - original.volume) / std::abs(original.volume)));
+    if (relative_change(original.boundary_measure, fr.boundary_measure))
+      return fail(format("boundary measure changed: %.10g -> %.10g (relative %.2g; a hanging node "
+                         "or a face split differently from its two sides)",
+                         original.boundary_measure, fr.boundary_measure,
+                         std::abs(fr.boundary_measure - original.boundary_measure) /
+                             std::abs(original.boundary_measure)));
+    if (!(fr.smallest_boundary_facet > 1e-8 * fr.boundary_measure))
+      if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
+        return fail(s);
     return CheckResult{};
   });
 }
