@@ -38,7 +38,7 @@ constexpr int kExitOk = 0, kExitInput = 1, kExitCheck = 2, kExitLimit = 3, kExit
 
 const char *kExitCodesHelp = "Exit codes: 0 success; 1 usage or input error (one line on stderr names "
                              "the file and the problem); 2 an internal check failed; 3 a limit "
-                             "(--max-elements, --max-memory, 32-bit ids) was reached, the output is still written "
+                             "(--max-elements, --max-memory, 32-bit ids, the precision limit) was reached, the output is still written "
                              "and conforming; 130 interrupted (no output written).";
 
 std::atomic<bool> g_interrupted{false};
@@ -325,6 +325,16 @@ int run_refine(const RefineArgs &a) {
     const std::size_t verts_before = mesh.num_vertices();
     RefineResult r = refine(mesh, selected, limits);
     if (r.cancelled) break;
+    if (r.precision_reached) {
+      limit_reached = true;
+      if (!a.quiet)
+        std::cerr << "bisect: stopping before iteration " << it
+                  << ": it would bisect an edge finer than doubles resolve (extent below 2^-40 "
+                     "of its coordinates' magnitude, or below 2^-100); writing the mesh after "
+                     "iteration "
+                  << it - 1 << "\n";
+      break;
+    }
     if (r.limit_reached) {
       limit_reached = true;
       if (!a.quiet)

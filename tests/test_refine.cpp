@@ -251,3 +251,47 @@ TEST_CASE("uniform triangle: newest vertex bisection has at most 4 classes, peri
     for (int k = 2; k + 2 <= 10; ++k) REQUIRE(run.qmin[k] == Approx(run.qmin[k + 2]).epsilon(1e-9));
   }
 }
+
+TEST_CASE("precision limit: refining around a point stops before an edge too fine for doubles, "
+          "undoing the iteration exactly",
+          "[refine][2d][3d]") {
+  for (int dim : {2, 3}) {
+    for (double offset : {0.0, 1e6}) {
+      Mesh m = generate_kuhn(dim, 2, offset, offset + 1);
+      mark_mesh(m, Marking::Index);
+      const Invariants inv = measure_invariants(m);
+      std::string spec = R"({"type": "sphere", "solid": true, "radius": 1e-300, "center": [)";
+      for (int k = 0; k < dim; ++k) spec += (k ? ", " : "") + std::to_string(offset + 0.3 + 0.05 * k);
+      auto region = parse_region(spec + "]}", dim, "test");
+      int it = 0;
+      RefineResult r;
+      for (; it < 300; ++it) {
+        const Mesh before = m;
+        r = refine(m, select_cells(m, *region));
+        if (r.precision_reached) {
+          REQUIRE(r.limit_reached);
+          REQUIRE(m.cells == before.cells);
+          REQUIRE(m.coords == before.coords);
+          REQUIRE(m.tag == before.tag);
+          break;
+        }
+      }
+      INFO(dim << "D at offset " << offset << ": stopped after " << it << " iterations");
+      REQUIRE(r.precision_reached);
+      REQUIRE(it > 20);
+      REQUIRE_CONFORMING(m, inv);
+      // Every edge of the mesh is still resolved.
+      for (std::size_t c = 0; c < m.num_cells(); ++c)
+        for (int i = 0; i <= dim; ++i)
+          for (int j = i + 1; j <= dim; ++j) {
+            const double *p = m.point(m.cell(CellId(c))[i]), *q = m.point(m.cell(CellId(c))[j]);
+            double ext = 0, mag = 0;
+            for (int k = 0; k < dim; ++k) {
+              ext = std::max(ext, std::abs(p[k] - q[k]));
+              mag = std::max({mag, std::abs(p[k]), std::abs(q[k])});
+            }
+            REQUIRE(ext >= kRelativeResolution * mag / 4);
+          }
+    }
+  }
+}
