@@ -295,3 +295,52 @@ TEST_CASE("precision limit: refining around a point stops before an edge too fin
     }
   }
 }
+
+TEST_CASE("pinched meshes: cells meeting only at a vertex or an edge are accepted, refined and "
+          "checked like any other",
+          "[refine][check][2d][3d]") {
+  struct Case {
+    const char *name;
+    int dim;
+    std::vector<double> coords;
+    std::vector<VertexId> cells;
+  };
+  const Case cases[] = {
+      {"2D: two triangles sharing a vertex", 2, {0, 0, 1, 0, 0, 1, -1, 0, 0, -1}, {0, 1, 2, 0, 3, 4}},
+      {"3D: two tets sharing a vertex", 3,
+       {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1}, {0, 1, 2, 3, 0, 4, 5, 6}},
+      {"3D: two tets sharing an edge", 3,
+       {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, -1, 0, 0.5, 0, -1, 0.5}, {0, 1, 2, 3, 0, 1, 4, 5}},
+  };
+  for (const Case &k : cases)
+    for (Marking marking : {Marking::Index, Marking::Longest, Marking::Sorted}) {
+      INFO(k.name << ", marking " << marking_name(marking));
+      Mesh m;
+      m.dim = k.dim;
+      m.coords = k.coords;
+      m.cells = k.cells;
+      REQUIRE_NOTHROW(prepare_input(m, "pinched.vtu"));
+      mark_mesh(m, marking);
+      const Invariants inv = measure_invariants(m);
+      REQUIRE(inv.euler == 1); // a wedge of two balls is contractible
+      REQUIRE_CONFORMING(m, inv);
+      refine_uniform(m);
+      REQUIRE_CONFORMING(m, inv);
+      // Around the pinch point, then elsewhere: the closure crosses the pinch.
+      for (const char *centre : {"0", "0.3"}) {
+        std::string spec = R"({"type": "sphere", "radius": 0.2, "center": [)";
+        for (int d = 0; d < k.dim; ++d) spec += std::string(d ? ", " : "") + centre;
+        auto region = parse_region(spec + "]}", k.dim, "test");
+        for (int it = 0; it < 4; ++it) {
+          refine(m, select_cells(m, *region));
+          REQUIRE_CONFORMING(m, inv);
+          REQUIRE(check_refined(m, inv).ok);
+        }
+      }
+      // Written state reads back as consistent.
+      Mesh copy = m;
+      encode_state(copy);
+      prepare_input(copy, "pinched.vtu");
+      REQUIRE(decode_state(copy, "pinched.vtu"));
+    }
+}
