@@ -701,7 +701,14 @@ int main(int argc, char **argv) {
                      "--iterations 10 -o ball-10.vtu\n"
                      "Writes the mesh (.vtu or .msh by extension, with the bisection state as "
                      "cell arrays bisect:*, so refining the output continues the same sequence) "
-                     "and a CSV with one row per iteration.\n" +
+                     "and a CSV with one row per iteration. A file's bisection state is checked on "
+                     "reading (an altered one is an input error).\n"
+                     "Before writing, a final check runs (unless --check checked every iteration): "
+                     "no degenerate or folded cell, every facet in at most two cells, the input's "
+                     "volume and boundary measure; a failure exits 2 and writes nothing. Refinement "
+                     "stops (exit 3, the mesh before that iteration written) before it would bisect "
+                     "an edge whose extent is below 2^-40 of its ends' largest coordinate magnitude "
+                     "or below 2^-100.\n" +
                      std::string(kExitCodesHelp));
   refine_cmd->add_option("input", ra.input, "Input mesh (.vtu or .msh)")->required();
   refine_cmd->add_option("--region,-r", ra.region, "Region spec (JSON): sphere, hemisphere, box, "
