@@ -43,7 +43,7 @@ constexpr int kExitOk = 0, kExitInput = 1, kExitCheck = 2, kExitLimit = 3, kExit
 
 const char *kExitCodesHelp = "Exit codes: 0 success; 1 usage or input error (one line on stderr names "
                              "the file and the problem); 2 an internal check failed; 3 a limit "
-                             "(--max-elements, --max-memory, 32-bit ids) was reached, the output is still written "
+                             "(--max-elements, --max-memory, 32-bit ids, the precision limit) was reached, the output is still written "
                              "and conforming; 130 interrupted (no output written).";
 
 std::atomic<bool> g_interrupted{false};
@@ -110,7 +110,7 @@ std::string with_commas(std::size_t n) {
 
 // Wall seconds per stage of a run, for --json (and bench/e2e.sh).
 struct StageSeconds {
-  double read = 0, validate = 0, select = 0, refine = 0, quality = 0, write = 0;
+  double read = 0, validate = 0, select = 0, refine = 0, quality = 0, final_check = 0, write = 0;
 };
 
 // Peak resident memory of this process so far, in bytes.
@@ -348,8 +348,8 @@ int run_refine(const RefineArgs &a) {
 #else
   const bool check = a.check;
 #endif
-  Invariants before;
-  if (check) before = measure_invariants(mesh);
+  // Without --check, volume and boundary measure are enough for the final check.
+  const Invariants before = measure_invariants(mesh, check);
   int corrupt_after = 0; // the test hook, see corrupt_one_bisection
   if (const char *e = std::getenv("BISECT_TEST_CORRUPT_ITERATION")) corrupt_after = std::atoi(e);
 
@@ -390,6 +390,16 @@ int run_refine(const RefineArgs &a) {
     RefineResult r = refine(mesh, selected, limits);
     stages.refine += seconds_since(t_refine);
     if (r.cancelled) break;
+    if (r.precision_reached) {
+      limit_reached = true;
+      if (!a.quiet)
+        std::cerr << "bisect: stopping before iteration " << it
+                  << ": it would bisect an edge finer than doubles resolve (extent below 2^-40 "
+                     "of its coordinates' magnitude, or below 2^-100); writing the mesh after "
+                     "iteration "
+                  << it - 1 << "\n";
+      break;
+    }
     if (r.limit_reached) {
       limit_reached = true;
       if (!a.quiet)
@@ -435,6 +445,18 @@ int run_refine(const RefineArgs &a) {
     std::cerr << "bisect: interrupted; no output written\n";
     return kExitInterrupted;
   }
+  // The final check, on by default (--check has checked every iteration in
+  // full): whatever went wrong, a non-conforming mesh is never written.
+  if (!check) {
+    auto t_check = std::chrono::steady_clock::now();
+    CheckResult c = check_refined(mesh, before);
+    stages.final_check = seconds_since(t_check);
+    if (!c.ok) {
+      std::cerr << "bisect: internal check failed on the refined mesh: " << c.failure
+                << "; no output written\n";
+      return kExitCheck;
+    }
+  }
   auto t_write = std::chrono::steady_clock::now();
   if (h_csv >= 0) write_text_file(outputs.file(h_csv), csv, rows.str());
   write_output_mesh(outputs, h_mesh, mesh, a.format);
@@ -465,7 +487,8 @@ int run_refine(const RefineArgs &a) {
     j["seconds"] = total;
     j["stages"] = {{"read", stages.read},       {"validate", stages.validate},
                    {"select", stages.select},   {"refine", stages.refine},
-                   {"quality", stages.quality}, {"write", stages.write}};
+                   {"quality", stages.quality}, {"final_check", stages.final_check},
+                   {"write", stages.write}};
     j["peak_rss_bytes"] = peak_rss_bytes();
     std::cout << j.dump() << std::endl;
   }
@@ -761,7 +784,14 @@ int main(int argc, char **argv) {
                      "--iterations 10 -o ball-10.vtu\n"
                      "Writes the mesh (.vtu or .msh by extension, with the bisection state as "
                      "cell arrays bisect:*, so refining the output continues the same sequence) "
-                     "and a CSV with one row per iteration.\n" +
+                     "and a CSV with one row per iteration. A file's bisection state is checked on "
+                     "reading (an altered one is an input error).\n"
+                     "Before writing, a final check runs (unless --check checked every iteration): "
+                     "no degenerate or folded cell, every facet in at most two cells, the input's "
+                     "volume and boundary measure; a failure exits 2 and writes nothing. Refinement "
+                     "stops (exit 3, the mesh before that iteration written) before it would bisect "
+                     "an edge whose extent is below 2^-40 of its ends' largest coordinate magnitude "
+                     "or below 2^-100.\n" +
                      std::string(kExitCodesHelp));
   refine_cmd->add_option("input", ra.input, "Input mesh (.vtu or .msh)")->required();
   refine_cmd->add_option("--region,-r", ra.region, "Region spec (JSON): sphere, hemisphere, box, "

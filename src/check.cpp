@@ -93,19 +93,26 @@ using UIntFor =
     std::conditional_t<Bits <= 32, std::uint32_t,
                        std::conditional_t<Bits <= 64, std::uint64_t, unsigned __int128>>;
 
+// SideOnly (facets, with `signs`, fewer than 2^31 vertices): refs[i] holds
+// only the side bit (kSideBit or 0), and the buffer packs the other ids in 31
+// bits each plus that bit: half the memory for tets (the final check).
 // WithRefs = false: only counts matter (refs is nullptr), the buffer holds the
 // K-1 ids alone.
-template <int Dim, int K, bool WithRefs = true, class Visit>
+template <int Dim, int K, bool WithRefs = true, bool SideOnly = false, class Visit>
 void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
                          const std::vector<std::int8_t> *signs = nullptr) {
   static_assert(K >= 2 && K <= 4);
   static constexpr auto subsets = combinations<Dim + 1, K>();
   constexpr int M = int(subsets.size());
-  constexpr int kRefBits = WithRefs ? 32 : 0;
-  using Packed = UIntFor<32 * (K - 1) + kRefBits>;
+  static_assert(!SideOnly || (WithRefs && K == Dim));
+  constexpr int kRefBits = SideOnly ? 1 : WithRefs ? 32 : 0;
+  constexpr int kIdBits = SideOnly ? 31 : 32;
+  using Packed = UIntFor<kIdBits * (K - 1) + kRefBits>;
   const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
   if (nc * M >= std::size_t(kSideBit))
     throw std::length_error("mesh too large for 32-bit sub-simplex references");
+  if (SideOnly && nv >= std::size_t(kSideBit))
+    throw std::length_error("mesh too large for 31-bit vertex ids");
   auto min_of = [&](const VertexId *cell, int m) {
     VertexId v = cell[subsets[m][0]];
     for (int i = 1; i < K; ++i)
@@ -142,8 +149,10 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
         sort_small<K>(key);
         unsigned __int128 p = 0;
         for (int j = 1; j < K; ++j)
-          p = (p << 32) | key[j];
-        if constexpr (WithRefs) {
+          p = (p << kIdBits) | key[j];
+        if constexpr (SideOnly) {
+          p = (p << 1) | unsigned(signs && facet_side<Dim>(cell, m, (*signs)[c]) > 0);
+        } else if constexpr (WithRefs) {
           std::uint32_t ref = std::uint32_t(c * M + m);
           if constexpr (K == Dim)
             if (signs && facet_side<Dim>(cell, m, (*signs)[c]) > 0)
@@ -163,10 +172,12 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
         group.clear();
         auto j = i;
         for (; j != last && (*j >> kRefBits) == rest; ++j)
-          if constexpr (WithRefs)
+          if constexpr (SideOnly)
+            group.push_back(std::uint32_t(*j & 1u) ? kSideBit : 0u);
+          else if constexpr (WithRefs)
             group.push_back(std::uint32_t(*j));
         for (int t = K - 1; t >= 1; --t)
-          key[t] = VertexId(rest >> (32 * (K - 1 - t)));
+          key[t] = VertexId((rest >> (kIdBits * (K - 1 - t))) & Packed(0xFFFFFFFFu >> (32 - kIdBits)));
         visit(std::as_const(key), WithRefs ? group.data() : nullptr, int(j - i));
         i = j;
       }
@@ -376,13 +387,15 @@ template <int Dim> int facet_side(const VertexId *cell, int m, int cell_sign) {
 // One walk over the distinct facets. With `signs` (per-cell orientation,
 // 0 for degenerate cells) it also checks that across every interior facet
 // the two opposite vertices lie on opposite sides of the facet's hyperplane.
-template <int Dim>
+// SideOnly (needs `signs` without degenerate cells): the lighter walk of the
+// final check; an overlap is reported by its facet only.
+template <int Dim, bool SideOnly = false>
 FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs,
                        bool keep_boundary) {
   constexpr int M = Dim + 1;
   FacetReport r;
   double pts[Dim * Dim];
-  for_each_subsimplex<Dim, Dim>(
+  for_each_subsimplex<Dim, Dim, true, SideOnly>(
       mesh,
       [&](const std::array<VertexId, Dim> &key, const std::uint32_t *refs, int count) {
         ++r.facets;
@@ -397,6 +410,11 @@ FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs,
         } else if (count == 2) {
           if (!signs || !r.overlap.empty())
             return;
+          if constexpr (SideOnly) {
+            if (refs[0] == refs[1])
+              r.overlap = "two cells overlap across facet " + id_list(key);
+            return;
+          }
           const CellId cells[2] = {CellId((refs[0] & ~kSideBit) / M),
                                    CellId((refs[1] & ~kSideBit) / M)};
           // Degenerate cells (sign 0) are reported before this pass; skip them.
@@ -796,7 +814,7 @@ bool relative_change(double before, double after) {
 
 } // namespace
 
-Invariants measure_invariants(const Mesh &mesh) {
+Invariants measure_invariants(const Mesh &mesh, bool euler) {
   if (mesh.num_cells() == 0)
     return {};
   return dispatch(mesh.dim, [&]<int D>() {
@@ -807,7 +825,8 @@ Invariants measure_invariants(const Mesh &mesh) {
     const FacetReport fr = facet_pass<D>(mesh, nullptr, false);
     inv.boundary_measure = fr.boundary_measure;
     inv.boundary_facets = fr.boundary_facets;
-    inv.euler = euler_characteristic<D>(mesh, fr.facets);
+    if (euler)
+      inv.euler = euler_characteristic<D>(mesh, fr.facets);
     return inv;
   });
 }
@@ -858,6 +877,64 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
                     std::to_string(chi));
     }
     return CheckResult{};
+  });
+}
+
+CheckResult check_refined(const Mesh &mesh, const Invariants &original) {
+  auto fail = [](std::string what) { return CheckResult{false, std::move(what)}; };
+  if (std::string s = check_shape(mesh); !s.empty())
+    return fail(s);
+  if (std::string s = check_ids(mesh); !s.empty())
+    return fail(s);
+  if (mesh.num_cells() == 0)
+    return CheckResult{};
+  return dispatch(mesh.dim, [&]<int D>() {
+    std::size_t bad;
+    double bad_volume = 0;
+    std::vector<std::int8_t> signs;
+    const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
+    if (bad != std::size_t(-1)) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%g", bad_volume);
+      return fail("cell " + std::to_string(bad) + " is degenerate (volume " + buf + ")");
+    }
+    const FacetReport fr = mesh.num_vertices() < std::size_t(kSideBit)
+                               ? facet_pass<D, true>(mesh, &signs, true)
+                               : facet_pass<D>(mesh, &signs, true);
+    if (!fr.nonmanifold.empty())
+      return fail(fr.nonmanifold);
+    if (!fr.overlap.empty())
+      return fail(fr.overlap);
+    if (relative_change(original.volume, volume))
+      return fail(format("volume changed: %.10g -> %.10g (relative %.2g)", original.volume, volume,
+                         std::abs(volume - original.volume) / std::abs(original.volume)));
+    if (relative_change(original.boundary_measure, fr.boundary_measure))
+      return fail(format("boundary measure changed: %.10g -> %.10g (relative %.2g; a hanging node "
+                         "or a face split differently from its two sides)",
+                         original.boundary_measure, fr.boundary_measure,
+                         std::abs(fr.boundary_measure - original.boundary_measure) /
+                             std::abs(original.boundary_measure)));
+    if (!(fr.smallest_boundary_facet > 1e-8 * fr.boundary_measure))
+      if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
+        return fail(s);
+    return CheckResult{};
+  });
+}
+
+void for_each_interior_facet(const Mesh &mesh,
+                             const std::function<bool(CellId, int, CellId, int)> &visit) {
+  if (mesh.num_cells() == 0)
+    return;
+  dispatch(mesh.dim, [&]<int D>() {
+    constexpr int M = D + 1;
+    bool going = true;
+    for_each_subsimplex<D, D>(mesh, [&](const std::array<VertexId, D> &, const std::uint32_t *refs,
+                                        int count) {
+      if (!going || count != 2)
+        return;
+      going = visit(CellId(refs[0] / M), opposite_of_facet<D>(int(refs[0] % M)),
+                    CellId(refs[1] / M), opposite_of_facet<D>(int(refs[1] % M)));
+    });
   });
 }
 

@@ -3,6 +3,7 @@
 
 #include "mesh.hpp"
 
+#include <functional>
 #include <string>
 
 namespace bisect {
@@ -14,7 +15,8 @@ struct Invariants {
   long long euler = 0;         // V - E + F - ... over the used vertices
   std::size_t boundary_facets = 0;
 };
-Invariants measure_invariants(const Mesh &mesh);
+// Without `euler` the Euler characteristic (the costly part) is left 0.
+Invariants measure_invariants(const Mesh &mesh, bool euler = true);
 
 struct CheckResult {
   bool ok = true;
@@ -43,6 +45,25 @@ struct CheckOptions {
 // measure (relative tolerance 1e-9) and Euler characteristic unchanged.
 CheckResult check_conformity(const Mesh &mesh, const Invariants *original = nullptr,
                              const CheckOptions &options = {});
+
+// Calls visit(a, i, b, j) once for every facet shared by exactly two cells:
+// cells a and b, and the local index (in each cell's tuple) of the vertex
+// opposite the facet. Facets come in increasing order of their sorted ids;
+// the walk stops when visit returns false.
+void for_each_interior_facet(const Mesh &mesh,
+                             const std::function<bool(CellId, int, CellId, int)> &visit);
+
+// The cheap final check `bisect refine` runs by default before writing (a
+// fraction of check_conformity's cost): no degenerate cell; every facet in at
+// most two cells; across every interior facet the two opposite vertices on
+// opposite sides (no inverted or folded cell); volume and boundary measure
+// equal to `original`'s (relative 1e-9). For a mesh made by bisection from a
+// valid one, a hanging node or a face split differently from its two sides
+// leaves unmatched facets counted as boundary, which grows the boundary
+// measure by at least twice the smallest boundary facet; when that facet is
+// below 1e-8 of the boundary measure, the geometric search of check_conformity
+// for vertices and facet centroids on boundary facets runs as well.
+CheckResult check_refined(const Mesh &mesh, const Invariants &original);
 
 // Validates a freshly read mesh and orients every cell positively. Throws
 // InputError naming `path`: NaN/Inf coordinates, ids out of range, repeated

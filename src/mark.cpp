@@ -3,6 +3,8 @@
 // neighbours always agree on the marks of a shared face.
 #include "mark.hpp"
 
+#include "check.hpp"
+#include "dimension.hpp"
 #include "measure.hpp"
 #include "numbering.hpp"
 
@@ -65,6 +67,37 @@ void triangle_tuple(const EdgeOrder &order, const VertexId *t, VertexId *out) {
   int gamma = 3 - e.first - e.second;
   VertexId a = t[e.first], g = t[gamma], b = t[e.second];
   out[0] = a, out[1] = g, out[2] = b;
+}
+
+EdgePick opposite_edge(const EdgeOrder &order, const VertexId *x, int n, int t) {
+  EdgePick e = consistent_edge(order, x + t, n + 1 - t);
+  return EdgePick{t + e.first, t + e.second};
+}
+
+void opposite_children(const EdgeOrder &order, const VertexId *x, int n, int t, EdgePick edge,
+                       VertexId z, VertexId *c1, VertexId *c2, Stage &child_stage, int &child_tag) {
+  const int nv = n + 1;
+  child_stage = Stage::Opposite;
+  child_tag = t + 1;
+  for (int which = 0; which < 2; ++which) {
+    VertexId *out = which == 0 ? c1 : c2;
+    const int drop = which == 0 ? edge.first : edge.second;
+    VertexId old[5];
+    int n_old = 0;
+    for (int i = t; i < nv; ++i)
+      if (i != drop) old[n_old++] = x[i];
+    if (n_old == 3) { // the old part is a triangle: enter Maubach
+      triangle_tuple(order, old, out);
+      out[3] = z;
+      for (int i = 0; i < t && 4 + i < nv; ++i) out[4 + i] = x[i];
+      child_stage = Stage::Maubach;
+      child_tag = 2;
+    } else {
+      out[0] = z;
+      for (int i = 0; i < t && 1 + i < nv; ++i) out[1 + i] = x[i];
+      std::copy(old, old + n_old, out + 1 + t);
+    }
+  }
 }
 
 namespace {
@@ -341,7 +374,7 @@ bool decode_state(Mesh &mesh, const std::string &path) {
       if (!(t >= 1 && t <= n && t == std::floor(t))) throw bad("Maubach tag out of range");
       mesh.stage[c] = Stage::Maubach;
     } else if (s == 0) {
-      if (!(t >= 0 && t <= n - 3 && t == std::floor(t))) throw bad("Stage 1 generation out of range");
+      if (!(t >= 0 && t <= n - 3 && t == std::floor(t))) throw bad("Stage 1 tag (generation) out of range");
       mesh.stage[c] = Stage::Opposite;
     } else {
       throw bad("stage must be 0 or 1");
@@ -358,10 +391,187 @@ bool decode_state(Mesh &mesh, const std::string &path) {
       x[i] = conn[int(p)];
     }
   }
+  if (std::string why = check_state_consistency(mesh); !why.empty())
+    throw InputError(path, "the bisection state is inconsistent (" + why +
+                               "): the file was not written by bisect as it is, or was altered "
+                               "(cell order, connectivity or bisect:* arrays)");
   for (int i : {io, is, it, im, ir})
     if (i >= 0) mesh.cell_data[i].name.clear();
   std::erase_if(mesh.cell_data, [](const DataArray &a) { return a.name.empty(); });
   return true;
+}
+
+namespace {
+
+// The refinement one cell would make of one of its facets, found by bisecting
+// the cell symbolically (tuples only; new vertices get labels above every
+// mesh id, one label per split edge, shared by the two sides of the facet so
+// that the same edge gets the same label). The facet's piece tree is walked
+// depth first, kStateCheckLevels levels deep; each piece records the edge it
+// is split by, and its two halves follow in a fixed order (the half keeping
+// the smaller-labelled end first). A cell bisection whose edge is not in the
+// piece moves the piece into the child that holds it, unsplit.
+template <int Dim> class FacetWalk {
+  static constexpr int N = Dim + 1;
+
+public:
+  FacetWalk(const EdgeOrder &order, VertexId first_label) : order_(order), first_(first_label) {}
+
+  // Side one: records the piece tree of facet `opposite` (local index of the
+  // vertex not in it) of the cell x. Side two: compares with what was recorded.
+  void record(const VertexId *x, Stage s, int t, int opposite) {
+    mids_.clear();
+    seq_.clear();
+    comparing_ = false;
+    start(x, s, t, opposite);
+  }
+  bool same(const VertexId *x, Stage s, int t, int opposite) {
+    comparing_ = true;
+    pos_ = 0;
+    differs_ = false;
+    start(x, s, t, opposite);
+    return !differs_ && pos_ == seq_.size();
+  }
+
+private:
+  void start(const VertexId *x, Stage s, int t, int opposite) {
+    VertexId piece[Dim];
+    for (int i = 0, k = 0; i < N; ++i)
+      if (i != opposite) piece[k++] = x[i];
+    walk(x, s, t, piece, 0);
+  }
+
+  VertexId label(VertexId a, VertexId b) {
+    const std::uint64_t key = edge_key(a, b);
+    for (const auto &[k, v] : mids_)
+      if (k == key) return v;
+    const VertexId z = first_ + VertexId(mids_.size());
+    mids_.emplace_back(key, z);
+    return z;
+  }
+
+  void note(std::uint64_t key) {
+    if (!comparing_) {
+      seq_.push_back(key);
+    } else if (pos_ >= seq_.size() || seq_[pos_++] != key) {
+      differs_ = true;
+    }
+  }
+
+  static bool holds(const VertexId *ids, int count, VertexId v) {
+    return std::find(ids, ids + count, v) != ids + count;
+  }
+
+  void walk(const VertexId *x0, Stage s, int t, const VertexId *piece, int level) {
+    VertexId x[N], c1[N], c2[N];
+    std::copy(x0, x0 + N, x);
+    // A bisection that misses the piece replaces the vertex opposite it, so
+    // a few steps always reach one that splits it; the bound is a guard.
+    for (int step = 0; step < 4 * N && !differs_; ++step) {
+      VertexId a, b, z;
+      Stage s1 = Stage::Maubach;
+      int t1 = 0;
+      if (s == Stage::Maubach) {
+        a = x[0];
+        b = x[t];
+        z = label(a, b);
+        maubach_children<Dim>(x, t, z, c1, c2);
+        t1 = maubach_child_tag(t, Dim);
+      } else if constexpr (Dim >= 3) {
+        const EdgePick e = opposite_edge(order_, x, Dim, t);
+        a = x[e.first];
+        b = x[e.second];
+        z = label(a, b);
+        opposite_children(order_, x, Dim, t, e, z, c1, c2, s1, t1);
+      } else {
+        break; // no Stage 1 in 2D (decode_state rejects it)
+      }
+      const bool has_a = holds(piece, Dim, a), has_b = holds(piece, Dim, b);
+      // The child holding a (and not b), and the one holding b.
+      const VertexId *with_a = holds(c1, N, a) ? c1 : c2, *with_b = with_a == c1 ? c2 : c1;
+      if (has_a && has_b) {
+        note(edge_key(a, b));
+        if (level + 1 == kStateCheckLevels || differs_) return;
+        VertexId keep_a[Dim], keep_b[Dim];
+        for (int i = 0; i < Dim; ++i) {
+          keep_a[i] = piece[i] == b ? z : piece[i];
+          keep_b[i] = piece[i] == a ? z : piece[i];
+        }
+        if (a < b) {
+          walk(with_a, s1, t1, keep_a, level + 1);
+          walk(with_b, s1, t1, keep_b, level + 1);
+        } else {
+          walk(with_b, s1, t1, keep_b, level + 1);
+          walk(with_a, s1, t1, keep_a, level + 1);
+        }
+        return;
+      }
+      std::copy(has_a ? with_a : with_b, (has_a ? with_a : with_b) + N, x);
+      s = s1;
+      t = t1;
+    }
+    note(~std::uint64_t(0)); // no split within the guard: cannot match a valid side
+  }
+
+  const EdgeOrder &order_;
+  VertexId first_;
+  std::vector<std::pair<std::uint64_t, VertexId>> mids_;
+  std::vector<std::uint64_t> seq_;
+  std::size_t pos_ = 0;
+  bool comparing_ = false, differs_ = false;
+};
+
+std::string id_tuple(const VertexId *x, int count) {
+  std::string s = "(";
+  for (int i = 0; i < count; ++i) s += (i ? ", " : "") + std::to_string(x[i]);
+  return s + ")";
+}
+
+} // namespace
+
+std::string check_state_consistency(const Mesh &mesh) {
+  if (mesh.dim < 3 || !mesh.marked() || mesh.num_cells() < 2) return {};
+  const EdgeOrder order = edge_order(mesh);
+  const VertexId first_label = VertexId(mesh.num_vertices());
+  if (std::size_t(first_label) + 4096 >= std::size_t(kNoVertex)) return {}; // no room for labels
+  std::string failure;
+  dispatch(mesh.dim, [&]<int D>() {
+    FacetWalk<D> walk(order, first_label);
+    // Stevenson's reflected neighbours: two Maubach cells with one tag whose
+    // tuples (or one tuple and the other's reflection) differ only in the
+    // vertex opposite the facet have the same descendants on it.
+    auto reflected = [&](CellId a, int i, CellId b, int j) {
+      if (mesh.stage[a] != Stage::Maubach || mesh.stage[b] != Stage::Maubach ||
+          mesh.tag[a] != mesh.tag[b])
+        return false;
+      const int d = mesh.tag[a];
+      const VertexId *x = mesh.cell(a), *y = mesh.cell(b);
+      for (int flip = 0; flip < 2; ++flip) {
+        const int ja = flip && i <= d ? d - i : i; // position of a's opposite vertex
+        if (ja != j) continue;
+        bool same = true;
+        for (int k = 0; k <= D && same; ++k) {
+          const int from = flip && k <= d ? d - k : k;
+          same = k == j || x[from] == y[k];
+        }
+        if (same) return true;
+      }
+      return false;
+    };
+    for_each_interior_facet(mesh, [&](CellId a, int i, CellId b, int j) {
+      if (reflected(a, i, b, j)) return true;
+      walk.record(mesh.cell(a), mesh.stage[a], mesh.tag[a], i);
+      if (walk.same(mesh.cell(b), mesh.stage[b], mesh.tag[b], j)) return true;
+      VertexId facet[4];
+      for (int k = 0, m = 0; k <= D; ++k)
+        if (k != i) facet[m++] = mesh.cell(a)[k];
+      std::sort(facet, facet + D);
+      failure = "cells " + std::to_string(a) + " and " + std::to_string(b) +
+                " would bisect their shared facet " + id_tuple(facet, D) + " differently";
+      return false;
+    });
+  });
+  return failure;
 }
 
 std::optional<Marking> parse_marking(const std::string &name) {

@@ -39,6 +39,16 @@ EdgePick consistent_edge(const EdgeOrder &order, const VertexId *ids, int count)
 // is its consistent edge, gamma the third vertex (ALGORITHMS.md §4).
 void triangle_tuple(const EdgeOrder &order, const VertexId *t, VertexId *out);
 
+// One Stage 1 ("opposite the new vertex") bisection of the cell x (n+1 ids:
+// its t new vertices first, then its old sub-simplex; numbering.hpp).
+// opposite_edge: the local indices of its refinement edge, the consistent
+// edge of the old sub-simplex. opposite_children: with z the midpoint of that
+// edge, writes the two children (the first drops the edge's first end) and
+// the Stage and tag both children get.
+EdgePick opposite_edge(const EdgeOrder &order, const VertexId *x, int n, int t);
+void opposite_children(const EdgeOrder &order, const VertexId *x, int n, int t, EdgePick edge,
+                       VertexId z, VertexId *c1, VertexId *c2, Stage &child_stage, int &child_tag);
+
 // Gives every cell its initial tuple, Stage and tag for `marking`:
 //   sorted:        (x0 < ... < xn)_n, Maubach.
 //   index/longest: 2D (alpha, gamma, beta)_2; 3D planar tets (a, c, b, d)_2
@@ -79,8 +89,22 @@ void encode_state(Mesh &mesh);
 // After reading: when the `bisect:*` arrays are present and valid, restores
 // the tuples, Stage and tag, removes the arrays and returns true. Returns
 // false (and leaves the mesh unmarked) when they are absent. Throws
-// InputError naming `path` when they are present but inconsistent.
+// InputError naming `path` and the first offending cell when they are
+// present but invalid: a value out of range (marking, stage, tag, order not a
+// permutation, edge ranks), or a state that is inconsistent (see
+// check_state_consistency).
 bool decode_state(Mesh &mesh, const std::string &path);
+
+// Whether the cells' states can be refined conformingly: for every facet
+// shared by two cells, the bisections the two cells would make on that facet
+// (the split edges of its pieces, level after level, kStateCheckLevels
+// levels deep: more than one Stage 1 step and one Maubach cycle of the facet)
+// are the same from both sides. Necessary for conformity, and true of every
+// state bisect writes. Empty when consistent, else one line naming the two
+// cells and the facet. 2D needs no check (a facet is an edge, split at its
+// midpoint from either side). Linear in the number of cells.
+inline constexpr int kStateCheckLevels = 4;
+std::string check_state_consistency(const Mesh &mesh);
 
 std::optional<Marking> parse_marking(const std::string &name);
 const char *marking_name(Marking marking);

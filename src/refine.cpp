@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 namespace bisect {
@@ -78,6 +79,7 @@ private:
 };
 
 struct LimitReached {};
+struct PrecisionReached {};
 struct Cancelled {};
 
 template <int Dim> class Refiner {
@@ -95,6 +97,11 @@ public:
   RefineResult run(std::vector<CellId> work) {
     RefineResult result;
     result.selected = work.size();
+    // Closure bisects cells about as coarse as the selected ones or coarser;
+    // when a selected cell's edge is near the precision limit, keep the undo
+    // log so that passing it anywhere undoes the iteration.
+    for (CellId c : work)
+      if (!logging_ && resolution(refinement_edge(c)) < 1024) logging_ = true;
     try {
       std::vector<std::uint8_t> flag;
       std::vector<std::uint64_t> seen;
@@ -144,6 +151,10 @@ public:
       undo();
       result.limit_reached = true;
       return result;
+    } catch (const PrecisionReached &) {
+      undo();
+      result.limit_reached = result.precision_reached = true;
+      return result;
     } catch (const Cancelled &) {
       undo();
       result.cancelled = true;
@@ -154,6 +165,25 @@ public:
   }
 
 private:
+  std::pair<VertexId, VertexId> refinement_edge(CellId c) const {
+    const VertexId *x = m_.cell(c);
+    if (m_.stage[c] == Stage::Maubach) return {x[0], x[m_.tag[c]]};
+    const EdgePick e = opposite_edge(order_, x, Dim, m_.tag[c]);
+    return {x[e.first], x[e.second]};
+  }
+
+  // The edge's extent over the smallest extent it may have to be bisected
+  // (kRelativeResolution, kAbsoluteResolution): below 1 it must not be.
+  double resolution(std::pair<VertexId, VertexId> edge) const {
+    const double *p = m_.point(edge.first), *q = m_.point(edge.second);
+    double extent = 0, magnitude = 0;
+    for (int k = 0; k < Dim; ++k) {
+      extent = std::max(extent, std::abs(p[k] - q[k]));
+      magnitude = std::max({magnitude, std::abs(p[k]), std::abs(q[k])});
+    }
+    return extent / std::max(kRelativeResolution * magnitude, kAbsoluteResolution);
+  }
+
   bool has_hanging_edge(CellId c) const {
     const VertexId *x = m_.cell(c);
     for (const LocalEdge &e : kLocalEdges<Dim>)
@@ -182,6 +212,10 @@ private:
     if (std::size_t(next) + 1 > limits_.max_vertices) {
       if (logging_) throw LimitReached{};
       throw CheckError("vertex ids would overflow 32 bits");
+    }
+    if (!(resolution({a, b}) >= 1)) {
+      if (logging_) throw PrecisionReached{};
+      throw CheckError("closure would bisect an edge below the precision limit");
     }
     const double *p = m_.point(a), *q = m_.point(b);
     double mid[Dim];
@@ -230,30 +264,11 @@ private:
   // Stage 1: x = (new vertices (t of them), old sub-simplex).
   void bisect_stage1(CellId c, const VertexId *x, int t) {
     VertexId c1[N], c2[N];
-    EdgePick e = consistent_edge(order_, x + t, N - t);
-    const int p = t + e.first, q = t + e.second;
-    VertexId z = midpoint(x[p], x[q]);
-    Stage child_stage = Stage::Opposite;
-    int child_tag = t + 1;
-    for (int which = 0; which < 2; ++which) {
-      VertexId *out = which == 0 ? c1 : c2;
-      const int drop = which == 0 ? p : q;
-      VertexId old[N];
-      int n_old = 0;
-      for (int i = t; i < N; ++i)
-        if (i != drop) old[n_old++] = x[i];
-      if (n_old == 3) { // the old part is a triangle: enter Maubach
-        triangle_tuple(order_, old, out);
-        out[3] = z;
-        for (int i = 0; i < t && 4 + i < N; ++i) out[4 + i] = x[i];
-        child_stage = Stage::Maubach;
-        child_tag = 2;
-      } else {
-        out[0] = z;
-        for (int i = 0; i < t && 1 + i < N; ++i) out[1 + i] = x[i];
-        std::copy(old, old + n_old, out + 1 + t);
-      }
-    }
+    const EdgePick e = opposite_edge(order_, x, Dim, t);
+    const VertexId z = midpoint(x[e.first], x[e.second]);
+    Stage child_stage;
+    int child_tag;
+    opposite_children(order_, x, Dim, t, e, z, c1, c2, child_stage, child_tag);
     std::copy(c1, c1 + N, m_.cell(c));
     m_.stage[c] = child_stage;
     m_.tag[c] = std::uint8_t(child_tag);

@@ -14,6 +14,18 @@ namespace bisect {
 // The cells whose closed simplex touches the region, then region.filter().
 std::vector<CellId> select_cells(const Mesh &mesh, const Region &region);
 
+// The precision limit, always on: an edge (p, q) is bisected only while its
+// extent max_k |p_k - q_k| is at least kRelativeResolution times the largest
+// coordinate magnitude max_k max(|p_k|, |q_k|) of its ends, and at least
+// kAbsoluteResolution. Rounding the midpoint moves it by at most 2^-53 of
+// that magnitude, so every new vertex stays within 2^-13 of the edge's extent
+// of the true midpoint: children keep positive volumes and the shapes
+// bisection guarantees, and no midpoint coincides with an end. The absolute
+// floor keeps volumes and facet measures (up to the 6th power of a length in
+// 4D) far from underflow.
+inline constexpr double kRelativeResolution = 0x1p-40; // about 9.1e-13
+inline constexpr double kAbsoluteResolution = 0x1p-100; // about 7.9e-31
+
 struct RefineLimits {
   std::size_t max_cells = std::numeric_limits<std::size_t>::max();
   // Largest vertex count ids may reach (kNoVertex is reserved); lowered in tests.
@@ -28,6 +40,9 @@ struct RefineResult {
   std::size_t closure_passes = 0; // passes after the first
   bool limit_reached = false;     // the iteration was undone: it would pass a limit
   bool cancelled = false;         // the iteration was undone: limits.cancel was set
+  bool precision_reached = false; // the iteration was undone: it would bisect an
+                                  // edge below the precision limit (limit_reached
+                                  // is set too)
   double kernel_seconds = 0;      // time in the bisection kernel proper (the rest
                                   // finds the cells to close)
 };

@@ -5,8 +5,13 @@
 // relative tolerance of about 1e-10 that is applied on the "touches" side, so
 // rounding can only add cells, never drop one):
 //   sphere         exact: min_{x in T}|x-c| <= r <= max_{x in T}|x-c| (surface)
-//                  or min <= r (solid). The max is at a vertex; the min is the
-//                  exact point-to-convex-hull distance (hull_within below).
+//                  or min <= r (solid). The max is at a vertex; the min is 0
+//                  when T holds c (simplex_holds: scale-free, so a sphere of
+//                  any radius > 0 inside a cell selects it), else the
+//                  point-to-convex-hull distance (hull_within below), whose
+//                  rounding error is about 1e-16 of the distances from c to
+//                  T's vertices: a cell that a sphere reaches by less than
+//                  that without holding c may be missed.
 //   hemisphere     exact: T is clipped by the halfspace x.n >= offset to a
 //                  convex polytope P (its vertices: the vertices of T inside
 //                  plus the crossings of the edges with the plane); P touches
@@ -183,6 +188,49 @@ template <int M> bool hull_within(const double *p, const double *pts, int n, dou
   return false;
 }
 
+// Is c in the closed simplex of the D+1 points (up to kBary in barycentric
+// coordinates)? Scale-free: the barycentric coordinates are solved from the
+// vertices' offsets from c, by elimination with partial pivoting, so their
+// error is relative to the simplex's own size and position, whatever the
+// distance from c to a vertex compared with a radius. This decides regions far
+// smaller than the cell that hold c (a sphere of radius 1e-300 inside a cell
+// of size 1 at coordinates 1e6).
+template <int D> bool simplex_holds(const double *c, const double *verts) {
+  double a[D][D + 1];
+  for (int r = 0; r < D; ++r) {
+    for (int j = 0; j < D; ++j)
+      a[r][j] = (verts[(j + 1) * D + r] - c[r]) - (verts[r] - c[r]);
+    a[r][D] = -(verts[r] - c[r]); // c - v0, from the offsets
+  }
+  for (int k = 0; k < D; ++k) {
+    int p = k;
+    for (int i = k + 1; i < D; ++i)
+      if (std::abs(a[i][k]) > std::abs(a[p][k]))
+        p = i;
+    if (!(std::abs(a[p][k]) > 0))
+      return false; // degenerate: leave it to the distance tests
+    if (p != k)
+      for (int j = 0; j <= D; ++j)
+        std::swap(a[k][j], a[p][j]);
+    for (int i = k + 1; i < D; ++i) {
+      const double f = a[i][k] / a[k][k];
+      for (int j = k; j <= D; ++j)
+        a[i][j] -= f * a[k][j];
+    }
+  }
+  double lam[D], sum = 0;
+  for (int k = D - 1; k >= 0; --k) {
+    double t = a[k][D];
+    for (int j = k + 1; j < D; ++j)
+      t -= a[k][j] * lam[j];
+    lam[k] = t / a[k][k];
+    if (!(lam[k] >= -kBary))
+      return false;
+    sum += lam[k];
+  }
+  return sum <= 1 + kBary;
+}
+
 // Does the convex hull of the n points touch the sphere |x - c| = r? The hull
 // is connected, so iff min <= r <= max; the max is at a point of the list.
 // `r2lo`/`r2hi` are r^2 shrunk/grown by the slack.
@@ -202,6 +250,9 @@ bool hull_meets_sphere(const double *c, double r2lo, double r2hi, const double *
   point_bbox<M>(pts, n, lo, hi);
   if (box_dist2<M>(c, lo, hi) > r2hi)
     return false;
+  // A simplex holding c touches the sphere: some point is at least r away.
+  if (n == M + 1 && simplex_holds<M>(c, pts))
+    return true;
   return hull_within<M>(c, pts, n, r2hi);
 }
 
@@ -211,6 +262,8 @@ template <int M> bool hull_meets_ball(const double *c, double r2hi, const double
   point_bbox<M>(pts, n, lo, hi);
   if (box_dist2<M>(c, lo, hi) > r2hi)
     return false;
+  if (n == M + 1 && simplex_holds<M>(c, pts))
+    return true;
   return hull_within<M>(c, pts, n, r2hi);
 }
 

@@ -1,6 +1,8 @@
 // Tests for src/check.cpp: invariants, conformity, input validation.
 #include "check.hpp"
 #include "generate.hpp"
+#include "mark.hpp"
+#include "refine.hpp"
 #include "measure.hpp"
 
 #include <catch2/catch.hpp>
@@ -371,4 +373,40 @@ TEST_CASE("check: two tets that split their shared face differently, without a h
   CHECK(check_conformity(alike).ok);
   CHECK(check_conformity(alike, &before).ok);
   CHECK(check_conformity(alike, &before, refined).ok);
+}
+
+TEST_CASE("final check: check_refined catches a hanging node, a split face, a degenerate and an "
+          "inverted cell, and passes honest refinements",
+          "[check][2d][3d]") {
+  // The hand-made hanging hypotenuse midpoint (2D).
+  const Mesh square = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1}, {0, 1, 2, 0, 2, 3});
+  const Invariants sq = measure_invariants(square, false);
+  const Mesh hanging = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 0.5, 0.5}, {0, 1, 4, 1, 2, 4, 0, 2, 3});
+  CHECK_THAT(check_refined(hanging, sq).failure, StartsWith("boundary measure changed"));
+  // A degenerate cell, and an inverted one (folded across the diagonal).
+  const Mesh flat = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 0.5, 0.5}, {0, 1, 2, 0, 2, 3, 0, 4, 2});
+  CHECK_THAT(check_refined(flat, sq).failure, Contains("degenerate"));
+  const Mesh folded = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 0.8, 0.3}, {0, 1, 2, 0, 2, 4});
+  CHECK_THAT(check_refined(folded, sq).failure, Contains("overlap"));
+  // The face split differently from its two sides (3D), no hanging node.
+  const std::vector<double> xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 0, 0, 0.5, 0.5, 0,
+                                   0.3, 0.3, 1, 0.3, 0.3, -1};
+  enum : VertexId { A, B, C, M, N, P, Q };
+  const Invariants two = measure_invariants(make_mesh(3, xyz, {A, B, C, P, A, B, C, Q}), false);
+  const Mesh split = make_mesh(3, xyz, {P, M, B, N, P, A, M, C, P, M, N, C,
+                                        Q, M, B, N, Q, A, M, N, Q, A, N, C});
+  CHECK_THAT(check_refined(split, two).failure, StartsWith("boundary measure changed"));
+  const Mesh alike = make_mesh(3, xyz, {P, M, B, N, P, A, M, C, P, M, N, C,
+                                        Q, M, B, N, Q, A, M, C, Q, M, N, C});
+  CHECK(check_refined(alike, two).ok);
+  // Honest refinements pass.
+  for (int dim : {2, 3, 4}) {
+    Mesh m = generate_kuhn(dim, 2);
+    mark_mesh(m, Marking::Index);
+    const Invariants inv = measure_invariants(m, false);
+    refine_uniform(m);
+    refine(m, {0, 1, 2});
+    INFO("dim " << dim);
+    CHECK(check_refined(m, inv).ok);
+  }
 }

@@ -251,3 +251,96 @@ TEST_CASE("uniform triangle: newest vertex bisection has at most 4 classes, peri
     for (int k = 2; k + 2 <= 10; ++k) REQUIRE(run.qmin[k] == Approx(run.qmin[k + 2]).epsilon(1e-9));
   }
 }
+
+TEST_CASE("precision limit: refining around a point stops before an edge too fine for doubles, "
+          "undoing the iteration exactly",
+          "[refine][2d][3d]") {
+  for (int dim : {2, 3}) {
+    for (double offset : {0.0, 1e6}) {
+      Mesh m = generate_kuhn(dim, 2, offset, offset + 1);
+      mark_mesh(m, Marking::Index);
+      const Invariants inv = measure_invariants(m);
+      std::string spec = R"({"type": "sphere", "solid": true, "radius": 1e-300, "center": [)";
+      for (int k = 0; k < dim; ++k) spec += (k ? ", " : "") + std::to_string(offset + 0.3 + 0.05 * k);
+      auto region = parse_region(spec + "]}", dim, "test");
+      int it = 0;
+      RefineResult r;
+      for (; it < 300; ++it) {
+        const Mesh before = m;
+        r = refine(m, select_cells(m, *region));
+        if (r.precision_reached) {
+          REQUIRE(r.limit_reached);
+          REQUIRE(m.cells == before.cells);
+          REQUIRE(m.coords == before.coords);
+          REQUIRE(m.tag == before.tag);
+          break;
+        }
+      }
+      INFO(dim << "D at offset " << offset << ": stopped after " << it << " iterations");
+      REQUIRE(r.precision_reached);
+      REQUIRE(it > 20);
+      REQUIRE_CONFORMING(m, inv);
+      // Every edge of the mesh is still resolved.
+      for (std::size_t c = 0; c < m.num_cells(); ++c)
+        for (int i = 0; i <= dim; ++i)
+          for (int j = i + 1; j <= dim; ++j) {
+            const double *p = m.point(m.cell(CellId(c))[i]), *q = m.point(m.cell(CellId(c))[j]);
+            double ext = 0, mag = 0;
+            for (int k = 0; k < dim; ++k) {
+              ext = std::max(ext, std::abs(p[k] - q[k]));
+              mag = std::max({mag, std::abs(p[k]), std::abs(q[k])});
+            }
+            REQUIRE(ext >= kRelativeResolution * mag / 4);
+          }
+    }
+  }
+}
+
+TEST_CASE("pinched meshes: cells meeting only at a vertex or an edge are accepted, refined and "
+          "checked like any other",
+          "[refine][check][2d][3d]") {
+  struct Case {
+    const char *name;
+    int dim;
+    std::vector<double> coords;
+    std::vector<VertexId> cells;
+  };
+  const Case cases[] = {
+      {"2D: two triangles sharing a vertex", 2, {0, 0, 1, 0, 0, 1, -1, 0, 0, -1}, {0, 1, 2, 0, 3, 4}},
+      {"3D: two tets sharing a vertex", 3,
+       {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1}, {0, 1, 2, 3, 0, 4, 5, 6}},
+      {"3D: two tets sharing an edge", 3,
+       {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, -1, 0, 0.5, 0, -1, 0.5}, {0, 1, 2, 3, 0, 1, 4, 5}},
+  };
+  for (const Case &k : cases)
+    for (Marking marking : {Marking::Index, Marking::Longest, Marking::Sorted}) {
+      INFO(k.name << ", marking " << marking_name(marking));
+      Mesh m;
+      m.dim = k.dim;
+      m.coords = k.coords;
+      m.cells = k.cells;
+      REQUIRE_NOTHROW(prepare_input(m, "pinched.vtu"));
+      mark_mesh(m, marking);
+      const Invariants inv = measure_invariants(m);
+      REQUIRE(inv.euler == 1); // a wedge of two balls is contractible
+      REQUIRE_CONFORMING(m, inv);
+      refine_uniform(m);
+      REQUIRE_CONFORMING(m, inv);
+      // Around the pinch point, then elsewhere: the closure crosses the pinch.
+      for (const char *centre : {"0", "0.3"}) {
+        std::string spec = R"({"type": "sphere", "radius": 0.2, "center": [)";
+        for (int d = 0; d < k.dim; ++d) spec += std::string(d ? ", " : "") + centre;
+        auto region = parse_region(spec + "]}", k.dim, "test");
+        for (int it = 0; it < 4; ++it) {
+          refine(m, select_cells(m, *region));
+          REQUIRE_CONFORMING(m, inv);
+          REQUIRE(check_refined(m, inv).ok);
+        }
+      }
+      // Written state reads back as consistent.
+      Mesh copy = m;
+      encode_state(copy);
+      prepare_input(copy, "pinched.vtu");
+      REQUIRE(decode_state(copy, "pinched.vtu"));
+    }
+}

@@ -707,3 +707,37 @@ TEST_CASE("read_region: the bundled example specs parse for their mesh dimension
   }
   CHECK_THROWS_AS(read_region(dir + "circle.json", 3), InputError); // wrong dimension
 }
+
+TEST_CASE("sphere: a sphere far smaller than a cell selects the cell holding its centre, "
+          "whatever the radius and the coordinates' magnitude",
+          "[region][2d][3d][4d]") {
+  for (int dim : {2, 3, 4})
+    for (double offset : {0.0, 1e6, -3e9}) {
+      // One simplex of size ~1 at the offset, the centre at its centroid.
+      std::vector<double> verts(std::size_t((dim + 1) * dim), offset);
+      for (int i = 1; i <= dim; ++i) verts[std::size_t(i * dim + i - 1)] += 1.0;
+      verts[std::size_t(dim)] += 0.25; // not a right-angled corner
+      std::vector<double> c(std::size_t(dim), 0.0);
+      for (int i = 0; i <= dim; ++i)
+        for (int k = 0; k < dim; ++k) c[std::size_t(k)] += verts[std::size_t(i * dim + k)] / (dim + 1);
+      for (double r : {1e-3, 1e-9, 1e-15, 1e-100, 1e-300})
+        for (bool solid : {false, true}) {
+          std::string spec = R"({"type": "sphere", "center": [)";
+          for (int k = 0; k < dim; ++k) {
+            char buf[64];
+            std::snprintf(buf, sizeof buf, "%s%.17g", k ? ", " : "", c[std::size_t(k)]);
+            spec += buf;
+          }
+          char rb[64];
+          std::snprintf(rb, sizeof rb, "%.17g", r);
+          spec += std::string("], \"radius\": ") + rb + (solid ? R"(, "solid": true})" : "}");
+          INFO(dim << "D, offset " << offset << ", radius " << r << (solid ? ", solid" : ""));
+          auto region = parse_region(spec, dim, "test");
+          CHECK(region->touches(verts.data(), dim));
+          // A cell beside it (the simplex moved by 2 along x) is not selected.
+          std::vector<double> far = verts;
+          for (int i = 0; i <= dim; ++i) far[std::size_t(i * dim)] += 2.0;
+          CHECK_FALSE(region->touches(far.data(), dim));
+        }
+    }
+}
