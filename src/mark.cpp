@@ -407,7 +407,7 @@ namespace {
 // the cell symbolically (tuples only; new vertices get labels above every
 // mesh id, one label per split edge, shared by the two sides of the facet so
 // that the same edge gets the same label). The facet's piece tree is walked
-// depth first, kStateCheckLevels levels deep; each piece records the edge it
+// depth first, state_check_levels(Dim) levels deep; each piece records the edge it
 // is split by, and its two halves follow in a fixed order (the half keeping
 // the smaller-labelled end first). A cell bisection whose edge is not in the
 // piece moves the piece into the child that holds it, unsplit.
@@ -491,7 +491,7 @@ private:
       const VertexId *with_a = holds(c1, N, a) ? c1 : c2, *with_b = with_a == c1 ? c2 : c1;
       if (has_a && has_b) {
         note(edge_key(a, b));
-        if (level + 1 == kStateCheckLevels || differs_) return;
+        if (level + 1 == state_check_levels(Dim) || differs_) return;
         VertexId keep_a[Dim], keep_b[Dim];
         for (int i = 0; i < Dim; ++i) {
           keep_a[i] = piece[i] == b ? z : piece[i];
