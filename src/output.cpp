@@ -78,7 +78,10 @@ std::string temporary_name(const std::string &target, unsigned counter) {
   std::string base = p.filename().string();
   const std::size_t room = NAME_MAX - 1 - tail.size();
   if (base.size() > room) base.resize(room);
-  return (p.parent_path() / ("." + base + tail)).string();
+  std::string name(1, '.'); // appended piecewise: g++ 12 warns falsely on "." + base
+  name += base;
+  name += tail;
+  return (p.parent_path() / name).string();
 }
 
 } // namespace
