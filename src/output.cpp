@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <climits>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <string_view>
@@ -74,11 +75,13 @@ bool same_file(const std::string &a, const std::string &b) {
 // ".<name>.<pid>.<n>.tmp" with <name> cut so the whole stays within NAME_MAX.
 std::string temporary_name(const std::string &target, unsigned counter) {
   const fs::path p(target);
-  const std::string tail = "." + std::to_string(::getpid()) + "." + std::to_string(counter) + ".tmp";
+  char tail_buf[64];
+  std::snprintf(tail_buf, sizeof tail_buf, ".%ld.%u.tmp", long(::getpid()), counter);
+  const std::string tail = tail_buf;
   std::string base = p.filename().string();
   const std::size_t room = NAME_MAX - 1 - tail.size();
   if (base.size() > room) base.resize(room);
-  std::string name(1, '.'); // appended piecewise: g++ 12 warns falsely on "." + base
+  std::string name(1, '.');
   name += base;
   name += tail;
   return (p.parent_path() / name).string();
