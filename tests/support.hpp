@@ -13,6 +13,24 @@
 
 namespace bisect::testing {
 
+// "" when a and b hold the same mesh (dimension, coordinates, cells, and the
+// same arrays in the same order), else what differs first.
+inline std::string mesh_difference(const Mesh &a, const Mesh &b) {
+  if (a.dim != b.dim) return "dimension";
+  if (a.coords != b.coords) return "coordinates";
+  if (a.cells != b.cells) return "cells";
+  auto arrays = [](const std::vector<DataArray> &x, const std::vector<DataArray> &y,
+                   const char *kind) -> std::string {
+    if (x.size() != y.size()) return std::string(kind) + " array count";
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (x[i].name != y[i].name || x[i].components != y[i].components || x[i].values != y[i].values)
+        return std::string(kind) + " array '" + x[i].name + "'";
+    return {};
+  };
+  if (std::string d = arrays(a.point_data, b.point_data, "point"); !d.empty()) return d;
+  return arrays(a.cell_data, b.cell_data, "cell");
+}
+
 inline std::string data_path(const std::string &name) { return std::string(BISECT_DATA_DIR) + "/" + name; }
 
 // Renumbers vertices by a random permutation (cells keep their shape).

@@ -1,6 +1,7 @@
 // Reading and writing .vtu files, and the checks read_mesh/write_mesh make
 // before any format-specific code runs.
 #include "io.hpp"
+#include "support.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -122,23 +123,7 @@ Mesh two_tets() {
   return m;
 }
 
-void require_same(const Mesh &a, const Mesh &b) {
-  REQUIRE(a.dim == b.dim);
-  REQUIRE(a.coords == b.coords);
-  REQUIRE(a.cells == b.cells);
-  REQUIRE(a.point_data.size() == b.point_data.size());
-  for (std::size_t i = 0; i < a.point_data.size(); ++i) {
-    CHECK(a.point_data[i].name == b.point_data[i].name);
-    CHECK(a.point_data[i].components == b.point_data[i].components);
-    CHECK(a.point_data[i].values == b.point_data[i].values);
-  }
-  REQUIRE(a.cell_data.size() == b.cell_data.size());
-  for (std::size_t i = 0; i < a.cell_data.size(); ++i) {
-    CHECK(a.cell_data[i].name == b.cell_data[i].name);
-    CHECK(a.cell_data[i].components == b.cell_data[i].components);
-    CHECK(a.cell_data[i].values == b.cell_data[i].values);
-  }
-}
+void require_same(const Mesh &a, const Mesh &b) { REQUIRE(testing::mesh_difference(a, b) == ""); }
 
 // A hand-written ASCII .vtu file (VTK's reference layout).
 struct AsciiVtu {

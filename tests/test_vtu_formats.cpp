@@ -3,6 +3,7 @@
 // type, id type and byte order, in 2D, 3D and 4D: read_vtu must give back
 // exactly the mesh that was written.
 #include "io.hpp"
+#include "support.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -171,23 +172,7 @@ Case make_case(int dim, bool float_points) {
   return c;
 }
 
-void require_same(const Mesh &a, const Mesh &b) {
-  REQUIRE(a.dim == b.dim);
-  REQUIRE(a.coords == b.coords);
-  REQUIRE(a.cells == b.cells);
-  REQUIRE(a.point_data.size() == b.point_data.size());
-  for (std::size_t i = 0; i < a.point_data.size(); ++i) {
-    CHECK(a.point_data[i].name == b.point_data[i].name);
-    CHECK(a.point_data[i].components == b.point_data[i].components);
-    CHECK(a.point_data[i].values == b.point_data[i].values);
-  }
-  REQUIRE(a.cell_data.size() == b.cell_data.size());
-  for (std::size_t i = 0; i < a.cell_data.size(); ++i) {
-    CHECK(a.cell_data[i].name == b.cell_data[i].name);
-    CHECK(a.cell_data[i].components == b.cell_data[i].components);
-    CHECK(a.cell_data[i].values == b.cell_data[i].values);
-  }
-}
+void require_same(const Mesh &a, const Mesh &b) { REQUIRE(testing::mesh_difference(a, b) == ""); }
 
 enum class Mode { Ascii, Binary, AppendedRaw, AppendedBase64 };
 const char *mode_name(Mode m) {
