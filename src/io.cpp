@@ -5,6 +5,7 @@
 #include "output.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cctype>
 #include <cerrno>
 #include <cstdio>
@@ -68,9 +69,47 @@ void write_as(Format format, const std::string &path, const Mesh &mesh) {
 
 } // namespace
 
+namespace {
+
+// A triangle mesh off z = 0 (the readers put its z into kPlaneZArray) is
+// accepted when it lies in one plane z = c up to 1e-12 of its extent; the
+// array then stays (refinement interpolates it, the writers put it back),
+// unless every z is 0. Anything less flat is a surface in 3D.
+void settle_plane(Mesh &mesh, const std::string &path, Format format) {
+  if (mesh.dim != 2) return;
+  auto it = std::find_if(mesh.point_data.begin(), mesh.point_data.end(),
+                         [](const DataArray &a) { return a.name == kPlaneZArray; });
+  if (it == mesh.point_data.end() || it->values.empty()) return;
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+    const double x[3] = {mesh.point(VertexId(v))[0], mesh.point(VertexId(v))[1], it->values[v]};
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], x[k]);
+      hi[k] = std::max(hi[k], x[k]);
+    }
+  }
+  const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], std::abs(lo[2]), std::abs(hi[2])});
+  if (hi[2] - lo[2] > 1e-12 * extent) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "the triangles are not in one plane z = c (z goes from %.17g to %.17g)",
+                  lo[2], hi[2]);
+    std::string what = std::string(buf) + "; bisect refines planar triangle meshes, tetrahedra and 4D meshes";
+    if (format == Format::Msh)
+      what += " (if these triangles bound a volume, its tetrahedra are missing: is a Physical Volume "
+              "missing in the .geo?)";
+    throw InputError(path, what);
+  }
+  if (lo[2] == 0 && hi[2] == 0) mesh.point_data.erase(it);
+}
+
+} // namespace
+
 Mesh read_mesh(const std::string &path) {
   check_readable_file(path);
-  return format_of(path) == Format::Vtu ? read_vtu(path) : read_msh(path);
+  const Format format = format_of(path);
+  Mesh mesh = format == Format::Vtu ? read_vtu(path) : read_msh(path);
+  settle_plane(mesh, path, format);
+  return mesh;
 }
 
 static Format format_named(const std::string &name, const std::string &format) {

@@ -978,10 +978,7 @@ int cell_dimension(Source &src, const MshFile &f) {
   if (dim == 2 && f.non_simplex[3].at != kNone) // volume cells beside a triangle mesh
     src.fail(f.non_simplex[3].at, "mixed non-simplex cells: " + type_text(f.non_simplex[3].type) +
                                       " in a triangle mesh is not supported");
-  if (dim == 2 && f.off_plane_at != kNone)
-    src.fail(f.off_plane_at, "surface mesh in 3D is not supported: " + f.off_plane_what +
-                                 " (a triangle mesh must lie in the plane z = 0)");
-  return dim;
+  return dim; // triangles off z = 0: see settle_plane in io.cpp
 }
 
 // "gmsh:physical" and "gmsh:geometrical", when the file provides them.
@@ -1078,6 +1075,13 @@ Mesh assemble(Source &src, MshFile &f) {
     vertex_of[p] = nv++;
     m.coords.insert(m.coords.end(), f.nodes.xyz.begin() + std::ptrdiff_t(3 * p),
                     f.nodes.xyz.begin() + std::ptrdiff_t(3 * p + std::size_t(dim)));
+  }
+  if (dim == 2 && f.off_plane_at != kNone) {
+    DataArray z{kPlaneZArray, 1, {}};
+    z.values.reserve(nv);
+    for (std::size_t p = 0; p < vertex_of.size(); ++p)
+      if (vertex_of[p] != kNoVertex) z.values.push_back(f.nodes.xyz[3 * p + 2]);
+    m.point_data.push_back(std::move(z));
   }
   m.cells.reserve(s.nodes.size());
   for (std::uint32_t p : s.nodes)
@@ -1316,8 +1320,17 @@ void write_entities(Output &out, int dim, const EntityPlan &plan) {
   out.text("\n$EndEntities\n");
 }
 
+// A 2D mesh's z (kPlaneZArray), which goes into the nodes; null if none.
+const DataArray *plane_z_of(const Mesh &mesh) {
+  if (mesh.dim != 2) return nullptr;
+  for (const DataArray &a : mesh.point_data)
+    if (a.name == kPlaneZArray && a.components == 1) return &a;
+  return nullptr;
+}
+
 void write_nodes(Output &out, const Mesh &mesh, long long entity) {
   const std::size_t nv = mesh.num_vertices();
+  const DataArray *plane_z = plane_z_of(mesh);
   out.text("$Nodes\n");
   out.size(nv ? 1 : 0);
   out.size(nv);
@@ -1332,7 +1345,8 @@ void write_nodes(Output &out, const Mesh &mesh, long long entity) {
       out.size(v + 1);
     for (std::size_t v = 0; v < nv; ++v)
       for (int i = 0; i < 3; ++i)
-        out.raw<double>(i < mesh.dim ? mesh.point(VertexId(v))[i] : 0.0);
+        out.raw<double>(i < mesh.dim ? mesh.point(VertexId(v))[i]
+                                     : plane_z ? plane_z->values[v] : 0.0);
   }
   out.text("\n$EndNodes\n");
 }
@@ -1398,7 +1412,8 @@ void write_msh(const std::string &path, const Mesh &mesh) {
   write_nodes(out, mesh, plan.entities.empty() ? 1 : plan.entities.front().tag);
   write_elements(out, mesh, plan);
   for (const DataArray &a : mesh.point_data)
-    write_data(out, "NodeData", a, mesh.num_vertices());
+    if (&a != plane_z_of(mesh))
+      write_data(out, "NodeData", a, mesh.num_vertices());
   for (const DataArray &a : mesh.cell_data)
     if (&a != geom && &a != phys)
       write_data(out, "ElementData", a, mesh.num_cells(), plan.order);

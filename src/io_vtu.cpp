@@ -241,6 +241,7 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
 
   // Coordinates: (x, y) in 2D, (x, y, z) in 3D, (x, y, z, t) in 4D.
   const bool move_points = mesh.dim == 3 && all_points;
+  bool off_plane = false;
   if (!move_points)
     mesh.coords.reserve(used.size() * std::size_t(mesh.dim));
   for (VertexId p : used) {
@@ -251,13 +252,18 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
       if (!std::isfinite(x[k]))
         throw InputError(path, "point " + std::to_string(p) + " has a non-finite coordinate");
     if (mesh.dim == 2 && x[2] != 0.0)
-      throw InputError(path, "surface mesh in 3D not supported (point " + std::to_string(p) +
-                                 " of a triangle has z = " + std::to_string(x[2]) + ")");
+      off_plane = true;
     if (!move_points)
       mesh.coords.insert(mesh.coords.end(), x, x + mesh.dim);
   }
   if (move_points)
     mesh.coords = std::move(g.points); // x, y, z of every point, in order
+  if (off_plane) { // see settle_plane in io.cpp
+    DataArray z{kPlaneZArray, 1, {}};
+    z.values.reserve(used.size());
+    for (VertexId p : used) z.values.push_back(g.points[3 * p + 2]);
+    mesh.point_data.push_back(std::move(z));
+  }
 
   // Numeric point and cell arrays; "t" of the 4D convention is a coordinate.
   for (std::size_t i = 0; i < g.point_data.size(); ++i) {

@@ -74,6 +74,12 @@ struct Mesh {
   VertexId *cell(CellId c) { return cells.data() + std::size_t(c) * (dim + 1); }
 };
 
+// A triangle mesh read from a plane z = c (c != 0, or with rounding noise in
+// z) keeps each vertex's z in this point array: refinement interpolates it
+// like any point array (exactly, for a plane), and the writers put it back
+// into the third coordinate instead of writing it as an array.
+inline constexpr const char *kPlaneZArray = "bisect:z";
+
 // Bad input: the message names the file and what is wrong; `main` prints it
 // on one line and exits with code 1.
 struct InputError : std::runtime_error {

@@ -271,6 +271,10 @@ Mesh slice_mesh(const Mesh &mesh4, int axis, double value) {
     }
   }
   copy_cell_data(mesh4, parent, out);
+  // A section of a 3D mesh at z (or t) = value stays at that height, so it
+  // overlays the mesh it was cut from (see kPlaneZArray).
+  if (mesh4.dim == 3 && axis == 2 && value != 0 && out.num_vertices() > 0)
+    out.point_data.push_back({kPlaneZArray, 1, std::vector<double>(out.num_vertices(), value)});
   return out;
 }
 

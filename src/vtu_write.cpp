@@ -228,9 +228,16 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
   }
   w.text("    <Piece NumberOfPoints=\"" + std::to_string(nv) + "\" NumberOfCells=\"" +
          std::to_string(nc) + "\">\n      <PointData>\n");
-  for (const DataArray &a : mesh.point_data)
+  // A 2D mesh's z (kPlaneZArray) goes into the points, not into an array.
+  const DataArray *plane_z = nullptr;
+  for (const DataArray &a : mesh.point_data) {
+    if (dim == 2 && a.name == kPlaneZArray && a.components == 1) {
+      plane_z = &a;
+      continue;
+    }
     write_array<double>(w, compression, level, a.name, a.components, a.values.size(),
                         [&](std::size_t i) { return a.values[i]; });
+  }
   if (dim == 4)
     write_array<double>(w, compression, level, "t", 1, nv,
                         [&](std::size_t v) { return mesh.coords[v * 4 + 3]; });
@@ -246,7 +253,8 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
   w.text("      </CellData>\n      <Points>\n");
   write_array<double>(w, compression, level, "Points", 3, 3 * nv, [&](std::size_t i) {
     const std::size_t v = i / 3, k = i % 3;
-    return int(k) < dim && k < 3 ? mesh.coords[v * std::size_t(dim) + k] : 0.0;
+    if (int(k) < dim) return mesh.coords[v * std::size_t(dim) + k];
+    return plane_z ? plane_z->values[v] : 0.0;
   });
   w.text("      </Points>\n      <Cells>\n");
   write_array<std::int64_t>(w, compression, level, "connectivity", 1, mesh.cells.size(),

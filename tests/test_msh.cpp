@@ -494,13 +494,42 @@ TEST_CASE("msh: quads mixed with triangles are rejected", "[io]") {
   fs::remove(path);
 }
 
-TEST_CASE("msh: triangles off the z=0 plane are rejected", "[io]") {
+TEST_CASE("msh: triangles not in one plane z = c are rejected, with a hint", "[io]") {
   const std::string path =
       write_file("off_plane.msh", replaced(kSquare22, "3 1 1 0\n", "3 1 1 0.5\n"));
-  CHECK_THAT(read_error(path), Contains(path) && Contains("line 14") &&
-                                   Contains("surface mesh in 3D") && Contains("not supported") &&
-                                   Contains("node 3"));
+  std::string e;
+  try {
+    read_mesh(path);
+  } catch (const InputError &x) {
+    e = x.what();
+  }
+  CHECK_THAT(e, Contains(path) && Contains("not in one plane z = c") && Contains("Physical Volume"));
   fs::remove(path);
+}
+
+TEST_CASE("msh: a triangle mesh in the plane z = 5 is read, refined and written back at z = 5",
+          "[io]") {
+  std::string text = kSquare22;
+  for (const char *node : {"1 0 0 0\n", "2 1 0 0\n", "3 1 1 0\n", "4 0 1 0\n"}) {
+    std::string n = node;
+    text = replaced(text, n, n.substr(0, n.size() - 2) + "5\n");
+  }
+  const std::string path = write_file("plane5.msh", text);
+  const Mesh m = read_mesh(path);
+  REQUIRE(m.dim == 2);
+  const DataArray *z = find_array(m.point_data, kPlaneZArray);
+  REQUIRE(z);
+  for (double v : z->values) CHECK(v == 5.0);
+  const std::string out = temp_path("plane5-out.msh");
+  write_mesh(out, m);
+  const std::string written = read_file(out);
+  CHECK(written.find("bisect:z") == std::string::npos); // in the nodes, not an array
+  const Mesh back = read_mesh(out);
+  const DataArray *zb = find_array(back.point_data, kPlaneZArray);
+  REQUIRE(zb);
+  CHECK(zb->values == z->values);
+  fs::remove(path);
+  fs::remove(out);
 }
 
 TEST_CASE("msh: higher-order simplices are rejected", "[io]") {

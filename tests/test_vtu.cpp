@@ -260,7 +260,7 @@ TEST_CASE("vtu: lower-dimensional cells are ignored and unused points dropped", 
   CHECK(m.cell_data[0].values == std::vector<double>{103, 104});
 }
 
-TEST_CASE("vtu: triangles off the plane z = 0 are rejected", "[io][2d]") {
+TEST_CASE("vtu: triangles not in one plane z = c are rejected", "[io][2d]") {
   TempDir dir;
   AsciiVtu f;
   f.num_points = 3;
@@ -270,7 +270,31 @@ TEST_CASE("vtu: triangles off the plane z = 0 are rejected", "[io][2d]") {
   f.offsets = "3";
   f.types = "5";
   write_text(dir.file("surface.vtu"), f.text());
-  require_clean_read_error(dir.file("surface.vtu"), "surface mesh in 3D not supported");
+  require_clean_read_error(dir.file("surface.vtu"), "not in one plane z = c");
+}
+
+TEST_CASE("vtu: a triangle mesh in the plane z = c keeps its z through refinement and writing",
+          "[io][2d]") {
+  TempDir dir;
+  AsciiVtu f;
+  f.num_points = 4;
+  f.points = "0 0 5  1 0 5  1 1 5.000000000000001  0 1 5"; // rounding noise in z too
+  f.num_cells = 2;
+  f.connectivity = "0 1 2  0 2 3";
+  f.offsets = "3 6";
+  f.types = "5 5";
+  write_text(dir.file("plane.vtu"), f.text());
+  Mesh m = read_mesh(dir.file("plane.vtu"));
+  REQUIRE(m.dim == 2);
+  REQUIRE(m.point_data.size() == 1);
+  REQUIRE(m.point_data[0].name == kPlaneZArray);
+  write_mesh(dir.file("back.vtu"), m);
+  const Mesh back = read_mesh(dir.file("back.vtu"));
+  REQUIRE(testing::mesh_difference(m, back) == "");
+  // Exactly z = 0: no array.
+  f.points = "0 0 0  1 0 0  1 1 0  0 1 0";
+  write_text(dir.file("flat.vtu"), f.text());
+  REQUIRE(read_mesh(dir.file("flat.vtu")).point_data.empty());
 }
 
 TEST_CASE("vtu: 4D file without t array is rejected naming t", "[io][4d]") {

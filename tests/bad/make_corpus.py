@@ -119,7 +119,7 @@ bad("inf-coordinate.msh", msh22(SQ_NODES[:2] + [(3, 1, "inf", 0), SQ_NODES[3]], 
 bad("huge-coordinate.msh", msh22(SQ_NODES[:2] + [(3, 1, "1e999", 0), SQ_NODES[3]], SQ_TRIS),
     "1e999")
 bad("surface-in-3d.msh", msh22(SQ_NODES[:2] + [(3, 1, 1, 0.5), SQ_NODES[3]], SQ_TRIS),
-    "surface mesh")
+    "not in one plane z = c")
 bad("repeated-vertex.msh", msh22(SQ_NODES, [SQ_TRIS[0], (2, 2, [1, 1], [1, 3, 3])]),
     "repeats")
 bad("zero-area-triangle.msh",
