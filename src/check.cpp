@@ -806,6 +806,335 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
   return {};
 }
 
+// Local injectivity (the angle condition): around every codimension-2 face
+// F (a vertex in 2D, an edge in 3D, a triangle in 4D) the dihedral angles at
+// F of the cells containing it sum to 2π when F is interior, and to the
+// interior angle of the boundary at F when F lies in exactly two boundary
+// facets. Everything happens in the plane normal to F: each cell is a wedge
+// between the projections u_a, u_b of its two vertices off F, of angle in
+// (0, π). Once every interior facet has its two cells on opposite sides
+// (facet_pass), consecutive wedges turn the same way, so the sum exceeds the
+// expected value by a whole number of turns: 2π·k, k >= 0, and k > 0 exactly
+// when the cells fold over each other there. Hence the threshold π: exact
+// in exact arithmetic and blind to rounding, even in accepted slivers.
+// A face in more boundary facets (a pinch) has several fans of cells, each
+// checked against the boundary angle between its two end facets, and
+// together they must not exceed one turn.
+struct AngleFinding {
+  double sum = 0, expected = 0;
+  int cells = 0;
+  bool boundary = false;
+};
+
+template <int Dim> class StarAngles {
+public:
+  explicit StarAngles(const Mesh &mesh) : mesh_(mesh) {}
+
+  // face: Dim - 1 vertex ids; extras[2 i], extras[2 i + 1]: the other two
+  // vertices of cell i. True when the star of the face is tangled.
+  bool tangled(const VertexId *face, const VertexId *extras, int n, AngleFinding &out) {
+    constexpr int K = Dim - 1;
+    const double *f0 = mesh_.point(face[0]);
+    int nb = 0; // orthonormal basis of the span of F - f0
+    for (int i = 1; i < K; ++i) {
+      double e[Dim];
+      for (int d = 0; d < Dim; ++d)
+        e[d] = mesh_.point(face[i])[d] - f0[d];
+      for (int j = 0; j < nb; ++j) {
+        const double s = dot(e, basis_[j]);
+        for (int d = 0; d < Dim; ++d)
+          e[d] -= s * basis_[j][d];
+      }
+      const double len = std::sqrt(dot(e, e));
+      if (!(len > 0))
+        return false;
+      for (int d = 0; d < Dim; ++d)
+        basis_[nb][d] = e[d] / len;
+      ++nb;
+    }
+    angle_.resize(n);
+    double total = 0;
+    for (int i = 0; i < n; ++i) {
+      double ua[Dim], ub[Dim];
+      project(f0, nb, extras[2 * i], ua);
+      project(f0, nb, extras[2 * i + 1], ub);
+      angle_[i] = angle(ua, ub);
+      total += angle_[i];
+    }
+    // The link of F: the vertices off F, joined by the cells. Each has one
+    // or two cells (facet_pass), so the link is paths (their ends: boundary
+    // facets) and cycles. entry_: (vertex, cell) sorted by vertex.
+    entry_.clear();
+    for (int i = 0; i < n; ++i) {
+      entry_.push_back({extras[2 * i], i});
+      entry_.push_back({extras[2 * i + 1], i});
+    }
+    std::sort(entry_.begin(), entry_.end());
+    auto cells_of = [&](VertexId v) {
+      auto first = std::lower_bound(entry_.begin(), entry_.end(), std::make_pair(v, 0));
+      auto last = first;
+      while (last != entry_.end() && last->first == v)
+        ++last;
+      return std::make_pair(first, last);
+    };
+    auto other = [&](int cell, VertexId v) {
+      return extras[2 * cell] == v ? extras[2 * cell + 1] : extras[2 * cell];
+    };
+    constexpr double kTwoPi = 2 * M_PI;
+    out.cells = n;
+    seen_.assign(n, 0);
+    fans_.clear();
+    int paths = 0;
+    for (std::size_t e = 0; e < entry_.size();) {
+      auto [first, last] = cells_of(entry_[e].first);
+      e = std::size_t(last - entry_.begin());
+      if (last - first != 1 || seen_[first->second])
+        continue;
+      // A path from boundary facet F + p to boundary facet F + q.
+      const VertexId p = first->first;
+      int cell = first->second;
+      const VertexId w = other(cell, p);
+      VertexId at = p;
+      double sum = 0;
+      int cells = 0;
+      for (;;) {
+        seen_[cell] = 1;
+        sum += angle_[cell];
+        ++cells;
+        at = other(cell, at);
+        auto [f2, l2] = cells_of(at);
+        if (l2 - f2 != 2)
+          break;
+        cell = f2->second == cell ? (f2 + 1)->second : f2->second;
+      }
+      ++paths;
+      fans_.push_back({p, w, sum});
+      out.sum = sum;
+      out.cells = cells;
+      out.boundary = true;
+      if (!boundary_angle_fits(f0, nb, p, w, at, sum, out.expected))
+        return true;
+    }
+    double cycles = 0;
+    int in_cycles = 0;
+    for (int i = 0; i < n; ++i)
+      if (!seen_[i])
+        cycles += angle_[i], ++in_cycles;
+    out.boundary = false;
+    out.expected = kTwoPi;
+    if (in_cycles > 0 && (paths > 0 || std::abs(cycles - kTwoPi) > M_PI)) {
+      out.sum = total;
+      out.cells = n;
+      return true; // more than one turn, or a turn and boundary fans besides
+    }
+    // Fans of a pinched face must not overlap one another: their angular
+    // intervals in one frame (e1, e2) of the normal plane, sorted by start,
+    // each end before the next start (within 1e-6 of a turn).
+    if (paths > 1) {
+      out.sum = total;
+      out.cells = n;
+      if (total > kTwoPi * (1 + 1e-6))
+        return true;
+      double e1[Dim], e2[Dim] = {}, u[Dim];
+      project(f0, nb, fans_[0].p, e1);
+      const double l1 = std::sqrt(dot(e1, e1));
+      if (!(l1 > 0))
+        return false;
+      for (int d = 0; d < Dim; ++d)
+        e1[d] /= l1;
+      double best = 0;
+      for (const Fan &f : fans_) { // e2: the most normal of the fans' first cells
+        project(f0, nb, f.w, u);
+        const double s = dot(u, e1);
+        for (int d = 0; d < Dim; ++d)
+          u[d] -= s * e1[d];
+        const double l = std::sqrt(dot(u, u));
+        if (l > best) {
+          best = l;
+          for (int d = 0; d < Dim; ++d)
+            e2[d] = u[d] / l;
+        }
+      }
+      if (!(best > 0))
+        return false;
+      auto direction = [&](VertexId v) {
+        project(f0, nb, v, u);
+        const double a = std::atan2(dot(u, e2), dot(u, e1));
+        return a < 0 ? a + kTwoPi : a;
+      };
+      intervals_.clear();
+      for (const Fan &f : fans_) {
+        const double a = direction(f.p), b = direction(f.w);
+        double turn = b - a; // from p towards w: counter-clockwise in (e1, e2)?
+        if (turn < -M_PI)
+          turn += kTwoPi;
+        else if (turn > M_PI)
+          turn -= kTwoPi;
+        double lo = turn >= 0 ? a : a - f.sum;
+        if (lo < 0)
+          lo += kTwoPi;
+        intervals_.push_back({lo, lo + f.sum});
+      }
+      std::sort(intervals_.begin(), intervals_.end());
+      const double tol = 1e-6 * kTwoPi;
+      for (std::size_t i = 0; i < intervals_.size(); ++i) {
+        const double next = i + 1 < intervals_.size() ? intervals_[i + 1].first
+                                                      : intervals_[0].first + kTwoPi;
+        if (intervals_[i].second > next + tol) {
+          out.expected = -1; // fans overlapping
+          return true;
+        }
+      }
+    }
+    return false;
+  }
+
+private:
+  // Whether the angles of a fan of cells from boundary facet F + p to F + q,
+  // summing to `sum`, fill the interior angle between them: from ray p to
+  // ray q, turning towards w (the other vertex of p's cell), in [0, 2π).
+  bool boundary_angle_fits(const double *f0, int nb, VertexId p, VertexId w, VertexId q,
+                           double sum, double &expected) const {
+    constexpr double kTwoPi = 2 * M_PI;
+    double up[Dim], uq[Dim], uw[Dim];
+    project(f0, nb, p, up);
+    project(f0, nb, q, uq);
+    project(f0, nb, w, uw);
+    // e1 = up / |up|, e2 = the part of uw normal to e1, normalized.
+    const double lp = std::sqrt(dot(up, up));
+    const double sw = dot(uw, up) / (lp * lp);
+    for (int d = 0; d < Dim; ++d)
+      uw[d] -= sw * up[d];
+    const double lw = std::sqrt(dot(uw, uw));
+    expected = sum;
+    if (!(lp > 0) || !(lw > 0))
+      return true;
+    const double x = dot(uq, up) / lp, y = dot(uq, uw) / lw;
+    const double a = std::atan2(y, x); // in (-π, π]
+    expected = a >= 0 ? a : kTwoPi + a;
+    if (std::abs(sum - expected) <= M_PI)
+      return true;
+    // Rays p and q nearly aligned (a needle-like boundary): which side q is
+    // on is below rounding; then 0 and 2π are both plausible.
+    const double lq = std::sqrt(dot(uq, uq));
+    if (std::abs(y) <= 1e-8 * lq && x > 0) {
+      const double alt = expected < M_PI ? expected + kTwoPi : expected - kTwoPi;
+      if (std::abs(sum - alt) <= M_PI)
+        return true;
+    }
+    return false;
+  }
+
+  static double dot(const double *a, const double *b) {
+    double s = 0;
+    for (int d = 0; d < Dim; ++d)
+      s += a[d] * b[d];
+    return s;
+  }
+  void project(const double *f0, int nb, VertexId v, double *u) const {
+    const double *x = mesh_.point(v);
+    for (int d = 0; d < Dim; ++d)
+      u[d] = x[d] - f0[d];
+    for (int j = 0; j < nb; ++j) {
+      const double s = dot(u, basis_[j]);
+      for (int d = 0; d < Dim; ++d)
+        u[d] -= s * basis_[j][d];
+    }
+  }
+  // Angle between u and v, from the part of u normal to v (no cancellation
+  // for small angles).
+  static double angle(const double *u, const double *v) {
+    const double vv = dot(v, v), uv = dot(u, v);
+    double w2 = 0;
+    for (int d = 0; d < Dim; ++d) {
+      const double r = u[d] - uv / vv * v[d];
+      w2 += r * r;
+    }
+    return std::atan2(std::sqrt(w2 * vv), uv);
+  }
+
+  const Mesh &mesh_;
+  double basis_[Dim > 2 ? Dim - 2 : 1][Dim];
+  std::vector<double> angle_;
+  std::vector<std::pair<VertexId, int>> entry_;
+  std::vector<char> seen_;
+  struct Fan {
+    VertexId p, w; // first end; the other vertex of its cell
+    double sum;
+  };
+  std::vector<Fan> fans_;
+  std::vector<std::pair<double, double>> intervals_;
+};
+
+// e.g. "tangled: the 7 cells around edge (3, 9) have dihedral angles summing
+// to 720 degrees, expected 360 (a full turn)"
+std::string angle_message(const std::string &face, const AngleFinding &f, int dim) {
+  char buf[200];
+  if (f.expected < 0) {
+    std::snprintf(buf, sizeof buf,
+                  " form fans (a pinch) that overlap; their %sangles sum to %.6g degrees",
+                  dim == 2 ? "" : "dihedral ", f.sum * 180 / M_PI);
+    return "tangled: the " + std::to_string(f.cells) + " cells around " + face + buf;
+  }
+  std::snprintf(buf, sizeof buf, " have %sangles summing to %.6g degrees, expected %.6g (%s)",
+                dim == 2 ? "" : "dihedral ", f.sum * 180 / M_PI, f.expected * 180 / M_PI,
+                f.boundary ? "the interior angle of the boundary there" : "a full turn");
+  return "tangled: the " + std::to_string(f.cells) + " cells around " + face + buf;
+}
+
+template <int Dim> std::string find_fold(const Mesh &mesh) {
+  constexpr int N = Dim + 1;
+  StarAngles<Dim> star(mesh);
+  AngleFinding f;
+  std::vector<VertexId> extras;
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  if constexpr (Dim == 2) {
+    // The faces are the vertices: cells by vertex (counting sort).
+    std::vector<std::size_t> start(nv + 1, 0);
+    for (VertexId v : mesh.cells)
+      ++start[v + 1];
+    for (std::size_t v = 1; v <= nv; ++v)
+      start[v] += start[v - 1];
+    std::vector<VertexId> pairs(2 * mesh.cells.size());
+    std::vector<std::size_t> cursor(start.begin(), start.end() - 1);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const VertexId *cell = mesh.cell(CellId(c));
+      for (int i = 0; i < N; ++i) {
+        const std::size_t at = 2 * cursor[cell[i]]++;
+        pairs[at] = cell[(i + 1) % N];
+        pairs[at + 1] = cell[(i + 2) % N];
+      }
+    }
+    for (std::size_t v = 0; v < nv; ++v) {
+      const int n = int(start[v + 1] - start[v]);
+      const VertexId face = VertexId(v);
+      if (n > 0 && star.tangled(&face, &pairs[2 * start[v]], n, f))
+        return angle_message("vertex " + std::to_string(v), f, 2);
+    }
+    return {};
+  } else {
+    static constexpr auto subsets = combinations<N, Dim - 1>();
+    constexpr int M = int(subsets.size());
+    std::string found;
+    for_each_subsimplex<Dim, Dim - 1>(
+        mesh, [&](const std::array<VertexId, Dim - 1> &key, const std::uint32_t *refs, int count) {
+          if (!found.empty())
+            return;
+          extras.clear();
+          for (int i = 0; i < count; ++i) {
+            const VertexId *cell = mesh.cell(CellId(refs[i] / M));
+            const auto &in = subsets[refs[i] % M];
+            for (int k = 0; k < N; ++k)
+              if (std::find(in.begin(), in.end(), k) == in.end())
+                extras.push_back(cell[k]);
+          }
+          if (star.tangled(key.data(), extras.data(), count, f))
+            found = angle_message((Dim == 3 ? "edge " : "triangle ") + id_list(key), f, Dim);
+        });
+    return found;
+  }
+}
+
 
 bool relative_change(double before, double after) {
   const double scale = std::max(std::abs(before), std::abs(after));
@@ -977,6 +1306,8 @@ void prepare_input(Mesh &mesh, const std::string &path) {
       throw InputError(path, "non-conforming input: " + s);
     if (std::string s = find_overlap<D>(mesh); !s.empty())
       throw InputError(path, "tangled: " + s);
+    if (std::string s = find_fold<D>(mesh); !s.empty())
+      throw InputError(path, s);
     // Orient every cell positively (a negatively oriented cell is not an error).
     for (std::size_t c = 0; c < nc; ++c)
       if (signs[c] < 0)

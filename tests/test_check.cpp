@@ -1,6 +1,7 @@
 // Tests for src/check.cpp: invariants, conformity, input validation.
 #include "check.hpp"
 #include "generate.hpp"
+#include "io.hpp"
 #include "mark.hpp"
 #include "refine.hpp"
 #include "measure.hpp"
@@ -173,6 +174,87 @@ TEST_CASE("check: a tangled mesh (two overlapping cells) is rejected", "[check][
     CHECK_THAT(r.failure, StartsWith("cells 0 and ") && Contains(" overlap across facet ("));
     CHECK_THAT(prepare_error(m, "k.vtu"), StartsWith("k.vtu: tangled: cells 0 and "));
   }
+}
+
+TEST_CASE("angle condition: the fuzzer's tangled inputs (one cell id changed) are rejected",
+          "[check][io][2d][3d]") {
+  const std::string dir = std::string(BISECT_DATA_DIR) + "/../fuzz/findings/minimized/";
+  for (const char *name : {"wrong-overlap-2d.msh", "wrong-overlap-3d.vtu"}) {
+    INFO(name);
+    const Mesh m = read_mesh(dir + name);
+    CHECK_THAT(prepare_error(m, name),
+               StartsWith(std::string(name) + ": tangled: the ") && Contains(" cells around "));
+  }
+}
+
+TEST_CASE("angle condition: every single vertex id changed in a Kuhn mesh is rejected, some by "
+          "the angle sums alone",
+          "[check][2d][3d][4d]") {
+  const int dim = GENERATE(2, 3, 4);
+  const Mesh kuhn = generate_kuhn(dim, dim == 2 ? 3 : 2);
+  const std::size_t stride = dim == 4 ? 29 : 1; // 4D: 14 of the 384 cells
+  REQUIRE(prepare_error(kuhn, "k.vtu") == "no error");
+  const int n = dim + 1;
+  int changes = 0, by_angles = 0;
+  for (std::size_t c = 0; c < kuhn.num_cells(); c += stride)
+    for (int i = 0; i < n; ++i)
+      for (VertexId v = 0; v < kuhn.num_vertices(); ++v) {
+        const VertexId *cell = kuhn.cell(CellId(c));
+        if (std::find(cell, cell + n, v) != cell + n)
+          continue;
+        Mesh m = kuhn;
+        m.cell(CellId(c))[i] = v;
+        const std::string e = prepare_error(m, "k.vtu");
+        INFO("cell " << c << " local vertex " << i << " -> " << v << ": " << e);
+        // The changed cell overlaps cells that are all still there (the
+        // domain is convex), or is flat.
+        CHECK((StartsWith("k.vtu: tangled: ").match(e) || Contains("zero volume").match(e) ||
+               Contains("non-manifold").match(e) || Contains("non-conforming").match(e)));
+        ++changes;
+        by_angles += Contains(" cells around ").match(e);
+      }
+  CHECK(changes > 0);
+  CHECK(by_angles > 0);
+}
+
+TEST_CASE("angle condition: valid meshes pass (Kuhn, perturbed, reoriented, refined, graded)",
+          "[check][2d][3d][4d]") {
+  const int dim = GENERATE(2, 3, 4);
+  const int k = dim == 4 ? 2 : 4;
+  Mesh m = generate_kuhn(dim, k);
+  REQUIRE_NOTHROW(prepare_input(m, "kuhn.vtu"));
+  // Perturb the interior vertices by up to 0.05 of the spacing, deterministically.
+  std::uint64_t state = 12345;
+  auto next = [&]() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return double(state >> 11) / double(1ull << 53) - 0.5;
+  };
+  for (std::size_t v = 0; v < m.num_vertices(); ++v) {
+    double *x = &m.coords[v * dim];
+    bool interior = true;
+    for (int d = 0; d < dim; ++d)
+      interior = interior && x[d] > 1e-9 && x[d] < 1 - 1e-9;
+    if (interior)
+      for (int d = 0; d < dim; ++d)
+        x[d] += 0.1 * next() / k;
+  }
+  // Flip some cells (prepare_input orients them).
+  for (std::size_t c = 0; c < m.num_cells(); c += 3)
+    std::swap(m.cell(CellId(c))[0], m.cell(CellId(c))[1]);
+  REQUIRE_NOTHROW(prepare_input(m, "perturbed.vtu"));
+  mark_mesh(m, Marking::Longest);
+  refine_uniform(m);
+  Mesh copy = m;
+  REQUIRE_NOTHROW(prepare_input(copy, "refined.vtu"));
+  // Graded: refine the cells near one corner twice more.
+  for (int round = 0; round < 2; ++round) {
+    std::vector<CellId> near;
+    for (std::size_t c = 0; c < m.num_cells(); ++c)
+      if (m.point(m.cell(CellId(c))[0])[0] < 0.3)
+        near.push_back(CellId(c));
+    refine(m, near);
+  }
+  REQUIRE_NOTHROW(prepare_input(m, "graded.vtu"));
 }
 
 TEST_CASE("check: a hanging node is rejected by prepare_input", "[check][2d][3d][4d]") {
