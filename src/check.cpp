@@ -1160,6 +1160,13 @@ Invariants measure_invariants(const Mesh &mesh, bool euler) {
   });
 }
 
+// "cell 7 is degenerate (volume 1e-20)", for the checks of a whole mesh.
+static std::string degenerate_cell(std::size_t cell, double volume) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", volume);
+  return "cell " + std::to_string(cell) + " is degenerate (volume " + buf + ")";
+}
+
 CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
                              const CheckOptions &options) {
   auto fail = [](std::string what) { return CheckResult{false, std::move(what)}; };
@@ -1172,11 +1179,7 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
     double bad_volume = 0;
     std::vector<std::int8_t> signs;
     const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
-    if (bad != std::size_t(-1)) {
-      char buf[64];
-      std::snprintf(buf, sizeof buf, "%g", bad_volume);
-      return fail("cell " + std::to_string(bad) + " is degenerate (volume " + buf + ")");
-    }
+    if (bad != std::size_t(-1)) return fail(degenerate_cell(bad, bad_volume));
     const FacetReport fr = facet_pass<D>(mesh, &signs, true);
     if (!fr.nonmanifold.empty())
       return fail(fr.nonmanifold);
@@ -1222,11 +1225,7 @@ CheckResult check_refined(const Mesh &mesh, const Invariants &original) {
     double bad_volume = 0;
     std::vector<std::int8_t> signs;
     const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
-    if (bad != std::size_t(-1)) {
-      char buf[64];
-      std::snprintf(buf, sizeof buf, "%g", bad_volume);
-      return fail("cell " + std::to_string(bad) + " is degenerate (volume " + buf + ")");
-    }
+    if (bad != std::size_t(-1)) return fail(degenerate_cell(bad, bad_volume));
     const FacetReport fr = mesh.num_vertices() < std::size_t(kSideBit)
                                ? facet_pass<D, true>(mesh, &signs, true)
                                : facet_pass<D>(mesh, &signs, true);

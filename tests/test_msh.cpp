@@ -291,19 +291,39 @@ TEST_CASE("msh: one element block per entity, data paired by position and by tag
   CHECK(blocks == entities.size());
   CHECK(elements == m.num_cells());
   // Element data rows come in file order (what meshio pairs by position):
-  // the first row's tag is the first element's tag.
-  const std::size_t first_element = at + 10 + 32 + 20; // section header, block header
-  std::uint64_t first_tag = 0;
-  std::memcpy(&first_tag, text.data() + first_element, 8);
+  // the row tags are the element tags, in the same sequence.
+  std::vector<std::uint64_t> element_tags;
+  std::size_t p = at + 10 + 32; // past "$Elements\n" and its four counts
+  for (std::uint64_t b = 0; b < blocks; ++b) {
+    std::int32_t dim = 0;
+    std::uint64_t count = 0;
+    std::memcpy(&dim, text.data() + p, 4);
+    std::memcpy(&count, text.data() + p + 12, 8);
+    p += 20;
+    for (std::uint64_t e = 0; e < count; ++e) {
+      std::uint64_t tag = 0;
+      std::memcpy(&tag, text.data() + p, 8);
+      element_tags.push_back(tag);
+      p += 8 * std::size_t(dim + 2);
+    }
+  }
+  REQUIRE(element_tags.size() == m.num_cells());
   const std::size_t data = text.find("$ElementData\n");
   REQUIRE(data != std::string::npos);
   // "...\n3\n0\n<components>\n<count>\n" then the rows.
   const std::size_t components_line = text.find("\n3\n0\n", data) + 5;
+  const int components = std::stoi(text.substr(components_line));
   const std::size_t count_line = text.find('\n', components_line) + 1;
-  const std::size_t first_row = text.find('\n', count_line) + 1;
-  std::int32_t first_row_tag = 0;
-  std::memcpy(&first_row_tag, text.data() + first_row, 4);
-  CHECK(std::uint64_t(first_row_tag) == first_tag);
+  std::size_t row = text.find('\n', count_line) + 1;
+  std::vector<std::uint64_t> row_tags;
+  for (std::size_t i = 0; i < m.num_cells(); ++i, row += 4 + 8 * std::size_t(components)) {
+    std::int32_t tag = 0;
+    std::memcpy(&tag, text.data() + row, 4);
+    row_tags.push_back(std::uint64_t(tag));
+  }
+  CHECK(row_tags == element_tags);
+  // Grouped: the element tags are not simply 1, 2, 3, ... in this mesh.
+  CHECK(!std::is_sorted(element_tags.begin(), element_tags.end()));
   // Read back (by tags): the mesh's own order and data.
   require_identical(m, read_msh(path));
   fs::remove(path);
