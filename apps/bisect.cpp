@@ -1,18 +1,18 @@
 // The `bisect` command line: refine, info, check, quality, generate.
 // Exit codes: 0 success, 1 usage or input error, 2 internal check failed,
 // 3 limit reached (the output is still a valid conforming mesh).
-#include "check.hpp"
-#include "colour.hpp"
-#include "extrude.hpp"
-#include "generate.hpp"
-#include "io.hpp"
-#include "mark.hpp"
-#include "measure.hpp"
-#include "output.hpp"
-#include "refine.hpp"
-#include "region.hpp"
-#include "slice.hpp"
-#include "vtu_write.hpp"
+#include "bisect/check.hpp"
+#include "bisect/colour.hpp"
+#include "bisect/extrude.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/io.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/measure.hpp"
+#include "bisect/output.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/region.hpp"
+#include "bisect/slice.hpp"
+#include "bisect/state.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -89,10 +89,6 @@ std::string one_line(const std::string &text) {
   }
   return out;
 }
-
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -171,9 +167,9 @@ void check_extension(const std::string &out) {
 }
 
 // Writes `mesh` with its bisection state into output `h` of `outputs`.
-void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const std::string &format = {}) {
+void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions &options = {}) {
   encode_state(mesh);
-  write_mesh_file(outputs.file(h), outputs.name(h), mesh, format);
+  write_mesh_file(outputs.file(h), outputs.name(h), mesh, options);
 }
 
 // ---------------------------------------------------------------- refine ---
@@ -332,9 +328,6 @@ int run_refine(const RefineArgs &a) {
   std::vector<int> h_slices;
   for (double t : a.slices) h_slices.push_back(outputs.add(slice_path(out, "t", t)));
 
-  set_vtu_compression(a.compression == "lz4"    ? VtuCompression::Lz4
-                      : a.compression == "none" ? VtuCompression::None
-                                                : VtuCompression::Zlib);
   StageSeconds stages;
   Mesh mesh = load_mesh(a.input, marking, a.quiet, &stages);
   check_output_format(out, mesh.dim, a.format);
@@ -453,7 +446,12 @@ int run_refine(const RefineArgs &a) {
   }
   auto t_write = std::chrono::steady_clock::now();
   if (h_csv >= 0) write_text_file(outputs.file(h_csv), csv, rows.str());
-  write_output_mesh(outputs, h_mesh, mesh, a.format);
+  WriteOptions write_options;
+  write_options.format = a.format;
+  write_options.compression = a.compression == "lz4"    ? Compression::Lz4
+                              : a.compression == "none" ? Compression::None
+                                                        : Compression::Zlib;
+  write_output_mesh(outputs, h_mesh, mesh, write_options);
   std::string slice_lines;
   for (std::size_t i = 0; i < a.slices.size(); ++i)
     slice_lines += write_slice(mesh, mesh.dim - 1, a.slices[i], outputs, h_slices[i]);

@@ -3,13 +3,13 @@
 // quality measurement timed apart) and peak memory per cell.
 //
 // Usage: bisect_bench [ball.msh] [iterations3d=40] [iterations4d=25]
-#include "generate.hpp"
-#include "io.hpp"
-#include "mark.hpp"
-#include "measure.hpp"
-#include "refine.hpp"
-#include "region.hpp"
-#include "check.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/io.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/measure.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/region.hpp"
+#include "bisect/check.hpp"
 
 #include <chrono>
 #include <cstdio>

@@ -5,7 +5,7 @@
 //
 // Usage: bisect_read_vtu_bench FILE.vtu [repeats=3] [ours]  ("ours": skip
 // VTK's reader, for profiling ours alone)
-#include "io.hpp"
+#include "bisect/io.hpp"
 
 #include <vtkNew.h>
 #include <vtkUnstructuredGrid.h>

@@ -2,11 +2,12 @@
 // and the property every accepted mesh must keep under refinement.
 #pragma once
 
-#include "check.hpp"
-#include "mark.hpp"
-#include "mesh.hpp"
-#include "refine.hpp"
-#include "region.hpp"
+#include "bisect/check.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/state.hpp"
+#include "bisect/mesh.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/region.hpp"
 
 #include <cstdint>
 #include <cstdio>

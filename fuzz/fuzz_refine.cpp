@@ -16,7 +16,7 @@
 // input cells, at most 2000 cells (4D: 1000) after any iteration (refine
 // undoes an iteration that would pass the cap), at most 6 iterations (4D: 4).
 #include "fuzz_common.hpp"
-#include "generate.hpp"
+#include "bisect/generate.hpp"
 
 #include <algorithm>
 #include <map>

@@ -5,7 +5,7 @@
 // the box, so a wrong box would silently miss cells). Intersections are
 // conservative and are not held to the box.
 #include "fuzz_common.hpp"
-#include "generate.hpp"
+#include "bisect/generate.hpp"
 
 #include <algorithm>
 #include <cmath>

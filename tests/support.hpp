@@ -1,8 +1,8 @@
 // Helpers shared by the tests.
 #pragma once
 
-#include "check.hpp"
-#include "mesh.hpp"
+#include "bisect/check.hpp"
+#include "bisect/mesh.hpp"
 
 #include <algorithm>
 #include <cstdint>

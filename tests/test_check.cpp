@@ -1,10 +1,10 @@
 // Tests for src/check.cpp: invariants, conformity, input validation.
-#include "check.hpp"
-#include "generate.hpp"
-#include "io.hpp"
-#include "mark.hpp"
-#include "refine.hpp"
-#include "measure.hpp"
+#include "bisect/check.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/io.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/measure.hpp"
 
 #include <catch2/catch.hpp>
 

@@ -1,10 +1,10 @@
 // Vertex colourings: propagation, its proof of impossibility, barycentric
 // subdivision (seed 001 §2-3).
-#include "colour.hpp"
-#include "generate.hpp"
-#include "io.hpp"
-#include "mark.hpp"
-#include "measure.hpp"
+#include "bisect/colour.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/io.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/measure.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

@@ -1,10 +1,10 @@
 // Space-time extrusion of 3D meshes by 4D Delaunay (seed 000 §5.2).
-#include "extrude.hpp"
-#include "generate.hpp"
-#include "mark.hpp"
-#include "measure.hpp"
-#include "refine.hpp"
-#include "region.hpp"
+#include "bisect/extrude.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/measure.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/region.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

@@ -1,16 +1,17 @@
 // Space-time extrusion by colour (seed 001): eq. 5 / eq. 9 tuples, Stevenson's
 // bisection equals Maubach's, conformity of local refinement, similarity
 // classes, and the closure cost of colour order against plain id order.
-#include "colour.hpp"
-#include "extrude.hpp"
-#include "generate.hpp"
-#include "io.hpp"
-#include "mark.hpp"
-#include "measure.hpp"
-#include "numbering.hpp"
-#include "refine.hpp"
-#include "region.hpp"
-#include "slice.hpp"
+#include "bisect/colour.hpp"
+#include "bisect/extrude.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/io.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/state.hpp"
+#include "bisect/measure.hpp"
+#include "core/numbering.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/region.hpp"
+#include "bisect/slice.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

@@ -1,7 +1,7 @@
 // Tests for src/generate.cpp: single simplices and Freudenthal-Kuhn cubes.
-#include "check.hpp"
-#include "generate.hpp"
-#include "measure.hpp"
+#include "bisect/check.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/measure.hpp"
 
 #include <catch2/catch.hpp>
 

@@ -1,12 +1,12 @@
 // Tests for levelset.cpp: the sampled zero-set test against the exact
 // regions, the Hessian and its indicator, refinement with a levelset region,
 // singular formulas, and the spec errors.
-#include "levelset.hpp"
+#include "region/levelset.hpp"
 
-#include "generate.hpp"
-#include "mark.hpp"
-#include "refine.hpp"
-#include "region.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/region.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

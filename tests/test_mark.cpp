@@ -1,9 +1,10 @@
 // Marking: the global edge order and the initial state (ALGORITHMS.md §2-4).
-#include "generate.hpp"
-#include "io.hpp"
-#include "mark.hpp"
-#include "numbering.hpp"
-#include "refine.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/io.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/state.hpp"
+#include "core/numbering.hpp"
+#include "bisect/refine.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

@@ -1,6 +1,6 @@
 // Tests for src/measure.cpp: volume, mean ratio, similarity keys.
-#include "generate.hpp"
-#include "measure.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/measure.hpp"
 
 #include <catch2/catch.hpp>
 

@@ -1,5 +1,5 @@
 // Gmsh .msh reading and writing (src/io_msh.cpp).
-#include "io.hpp"
+#include "bisect/io.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

@@ -1,9 +1,9 @@
 // 4D: Stage 1 then Maubach (ALGORITHMS.md §4, seed 000).
-#include "generate.hpp"
-#include "mark.hpp"
-#include "measure.hpp"
-#include "refine.hpp"
-#include "region.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/measure.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/region.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

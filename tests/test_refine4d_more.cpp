@@ -1,12 +1,13 @@
 // 4D: random Delaunay meshes, forced mark types, the extruded octant
 // (ALGORITHMS.md §4, seed 000 §5.1-5.2).
-#include "extrude.hpp"
-#include "generate.hpp"
-#include "io.hpp"
-#include "mark.hpp"
-#include "measure.hpp"
-#include "refine.hpp"
-#include "region.hpp"
+#include "bisect/extrude.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/io.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/state.hpp"
+#include "bisect/measure.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/region.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

@@ -1,9 +1,9 @@
 // Tests for region.cpp: the touches() predicate of every region type (exact
 // cases built by hand, and randomized checks against dense sampling of the
 // simplex), bounds(), and the errors of the JSON spec reader.
-#include "region.hpp"
+#include "bisect/region.hpp"
 
-#include "mesh.hpp"
+#include "bisect/mesh.hpp"
 
 #include <catch2/catch.hpp>
 

@@ -1,12 +1,13 @@
 // Sections of 4D meshes by hyperplanes x[axis] = value (slice.hpp).
-#include "slice.hpp"
+#include "bisect/slice.hpp"
 
-#include "check.hpp"
-#include "generate.hpp"
-#include "mark.hpp"
-#include "measure.hpp"
-#include "refine.hpp"
-#include "region.hpp"
+#include "bisect/check.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/state.hpp"
+#include "bisect/measure.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/region.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

@@ -1,11 +1,12 @@
 // The bisection state read from a file (mark.cpp decode_state): values out of
 // range and states whose neighbours would refine a shared facet differently
 // are input errors; every state bisect writes itself is accepted.
-#include "extrude.hpp"
-#include "generate.hpp"
-#include "mark.hpp"
-#include "refine.hpp"
-#include "region.hpp"
+#include "bisect/extrude.hpp"
+#include "bisect/generate.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/state.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/region.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

@@ -1,6 +1,6 @@
 // Reading and writing .vtu files, and the checks read_mesh/write_mesh make
 // before any format-specific code runs.
-#include "io.hpp"
+#include "bisect/io.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

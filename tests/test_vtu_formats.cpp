@@ -2,7 +2,7 @@
 // vtkXMLUnstructuredGridWriter, in every data mode, compressor, header
 // type, id type and byte order, in 2D, 3D and 4D: read_vtu must give back
 // exactly the mesh that was written.
-#include "io.hpp"
+#include "bisect/io.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>

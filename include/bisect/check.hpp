@@ -1,0 +1,76 @@
+// Conformity checks (ALGORITHMS.md §7), shared by the tests and `bisect check`.
+#pragma once
+
+#include "bisect/mesh.hpp"
+
+#include <functional>
+#include <string>
+
+namespace bisect {
+
+// Quantities refinement must leave unchanged.
+struct Invariants {
+  double volume = 0;           // sum of |cell volume|
+  double boundary_measure = 0; // sum of measures of facets owned by one cell
+  long long euler = 0;         // V - E + F - ... over the used vertices
+  std::size_t boundary_facets = 0;
+};
+// Without `euler` the Euler characteristic (the costly part) is left 0.
+Invariants measure_invariants(const Mesh &mesh, bool euler = true);
+
+struct CheckResult {
+  bool ok = true;
+  std::string failure; // the first failure, one line; empty when ok
+};
+
+struct CheckOptions {
+  // The caller vouches that the mesh was made by bisection (new vertices at
+  // edge midpoints) from a valid mesh whose invariants are `original`. Then
+  // a hanging node, or a face split differently by its two cells, leaves
+  // unmatched facets inside the domain, each counted as boundary, so the
+  // boundary measure grows by at least twice the smallest boundary facet:
+  // while every boundary facet exceeds 1e-8 of the boundary measure (far
+  // above its 1e-9 tolerance), the geometric search for vertices on boundary
+  // facets is skipped. It runs anyway without `original` or with smaller
+  // facets. For the fuzzer's small meshes; `bisect` itself never sets it.
+  bool refined_from_original = false;
+};
+
+// Checks: every facet shared by at most two cells; no degenerate cell; across
+// every interior facet the two opposite vertices lie on opposite sides (no
+// inverted or folded cell); no hanging node (a vertex on a boundary facet it
+// does not belong to); no face split differently by the cells on its two
+// sides (the centroid of a boundary facet on another boundary facet); and,
+// when `original` is given, volume, boundary
+// measure (relative tolerance 1e-9) and Euler characteristic unchanged.
+CheckResult check_conformity(const Mesh &mesh, const Invariants *original = nullptr,
+                             const CheckOptions &options = {});
+
+// Calls visit(a, i, b, j) once for every facet shared by exactly two cells:
+// cells a and b, and the local index (in each cell's tuple) of the vertex
+// opposite the facet. Facets come in increasing order of their sorted ids;
+// the walk stops when visit returns false.
+void for_each_interior_facet(const Mesh &mesh,
+                             const std::function<bool(CellId, int, CellId, int)> &visit);
+
+// The cheap final check `bisect refine` runs by default before writing (a
+// fraction of check_conformity's cost): no degenerate cell; every facet in at
+// most two cells; across every interior facet the two opposite vertices on
+// opposite sides (no inverted or folded cell); volume and boundary measure
+// equal to `original`'s (relative 1e-9). For a mesh made by bisection from a
+// valid one, a hanging node or a face split differently from its two sides
+// leaves unmatched facets counted as boundary, which grows the boundary
+// measure by at least twice the smallest boundary facet; when that facet is
+// below 1e-8 of the boundary measure, the geometric search of check_conformity
+// for vertices and facet centroids on boundary facets runs as well.
+CheckResult check_refined(const Mesh &mesh, const Invariants &original);
+
+// Validates a freshly read mesh and orients every cell positively. Throws
+// InputError naming `path`: NaN/Inf coordinates, ids out of range, repeated
+// vertex in a cell, zero-volume cells, a facet shared by three or more cells,
+// a hanging node (a vertex lying on a boundary facet it does not belong to,
+// found with a grid over the boundary vertices), a face split differently on
+// its two sides (a boundary facet's centroid on another boundary facet).
+void prepare_input(Mesh &mesh, const std::string &path);
+
+} // namespace bisect

@@ -1,0 +1,50 @@
+// Reading and writing meshes. The format is chosen by the file extension:
+// `.vtu` (VTK XML unstructured grid) and `.msh` (Gmsh 2.2 and 4.1).
+#pragma once
+
+#include "bisect/mesh.hpp"
+
+#include <string>
+
+namespace bisect {
+
+// Reads the cells of the highest dimension present (triangles -> 2D when all z
+// are 0, tetrahedra -> 3D, pentatopes in the 4D .vtu convention -> 4D).
+// Cells are returned in file order (.msh: in element tag order), unmarked
+// (mesh.stage empty). Cell data and
+// point data become DataArrays; Gmsh tags become cell arrays
+// "gmsh:physical" and "gmsh:geometrical". Throws InputError naming the file.
+Mesh read_mesh(const std::string &path);
+
+// How a mesh is written.
+enum class Compression { None, Zlib, Lz4 };
+struct WriteOptions {
+  std::string format;                          // "vtu" or "msh"; empty: by the name's extension
+  Compression compression = Compression::Zlib; // .vtu arrays (ParaView reads all three)
+};
+
+// Writes `mesh` as given (cells in their stored vertex order) to `path`,
+// through a temporary file in the same directory renamed when complete (an
+// OutputSet of one, see output.hpp: links are written through, a FIFO or
+// device is written into).
+void write_mesh(const std::string &path, const Mesh &mesh, const WriteOptions &options = {});
+
+// Writes `mesh` into the file `file` (created or truncated) in
+// `options.format` ("vtu" or "msh"), or when that is empty in the format
+// named by the extension of `name`; errors name `name`. For OutputSet users.
+void write_mesh_file(const std::string &file, const std::string &name, const Mesh &mesh,
+                     const WriteOptions &options = {});
+
+// Checks that `format` (or, when empty, the extension of `name`, any case)
+// is one the writer knows, and that a mesh of dimension `dim` fits it
+// (.msh holds no 4D mesh; dim 0: not known yet).
+void check_output_format(const std::string &name, int dim, const std::string &format = {});
+
+// Format-specific entry points (used by read_mesh/write_mesh and the tests).
+Mesh read_msh(const std::string &path);
+void write_msh(const std::string &path, const Mesh &mesh);
+Mesh read_vtu(const std::string &path);
+void write_vtu(const std::string &path, const Mesh &mesh,
+               Compression compression = Compression::Zlib);
+
+} // namespace bisect

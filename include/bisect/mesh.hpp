@@ -1,0 +1,84 @@
+// The mesh is plain data: flat arrays and nothing clever (STYLE.md §1-2).
+//
+// Every cell is an ordered tuple of dim+1 global vertex ids plus a small
+// bisection state (ALGORITHMS.md §1). Algorithms are free functions in the
+// other files of src/, one stage per file.
+#pragma once
+
+#include "bisect/error.hpp"
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace bisect {
+
+using VertexId = std::uint32_t;
+using CellId = std::uint32_t;
+inline constexpr VertexId kNoVertex = std::numeric_limits<VertexId>::max();
+inline constexpr CellId kNoCell = std::numeric_limits<CellId>::max();
+
+// Where an element is in its bisection sequence (see numbering.hpp).
+//  - Opposite: Stage 1, the "opposite-the-new-vertex" rule. `tag` counts the
+//    new vertices stored at the front of the tuple (0 for an initial element);
+//    the rest of the tuple is the old sub-simplex whose consistent edge (in the
+//    mesh's global edge order) is the refinement edge.
+//  - Maubach: the tuple (x0..xn) with tag d in 1..n; refinement edge (x0, xd).
+enum class Stage : std::uint8_t { Opposite = 0, Maubach = 1 };
+
+// The global edge order all marks come from (ALGORITHMS.md §2, §4).
+// Explicit: the order is the mesh's `edge_rank` table (forced marks, e.g. for
+// one pentatope of a chosen type); unranked edges come after every ranked
+// one, among themselves by index.
+enum class Marking : std::uint8_t { Index, Longest, Sorted, Explicit };
+
+// Key of the edge {a, b} in `Mesh::edge_rank`.
+inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return std::uint64_t(a) << 32 | b;
+}
+
+// A named array attached to points or cells; `components` values per entity.
+struct DataArray {
+  std::string name;
+  int components = 1;
+  std::vector<double> values;
+};
+
+// Point arrays that label vertices rather than sample a field: `colour` (the
+// vertex colouring of bisect colour / extrude) and `slice` (the time slice of
+// an extruded vertex). Averaging labels is meaningless, so a vertex made by
+// bisection or by slicing between two vertices gets kNoLabel instead.
+inline constexpr double kNoLabel = -1;
+inline bool is_label_array(const std::string &name) { return name == "colour" || name == "slice"; }
+
+struct Mesh {
+  int dim = 0;                   // 2, 3 or 4: space dimension == cell dimension
+  std::vector<double> coords;    // dim values per vertex
+  std::vector<VertexId> cells;   // dim+1 ids per cell, in tuple order
+  std::vector<Stage> stage;      // per cell; empty until the mesh is marked
+  std::vector<std::uint8_t> tag; // per cell; meaning depends on stage
+  Marking marking = Marking::Index;
+  std::unordered_map<std::uint64_t, std::uint32_t> edge_rank; // Marking::Explicit only
+  std::vector<DataArray> point_data;
+  std::vector<DataArray> cell_data;
+
+  std::size_t num_vertices() const { return dim ? coords.size() / dim : 0; }
+  std::size_t num_cells() const { return dim ? cells.size() / (dim + 1) : 0; }
+  int cell_size() const { return dim + 1; }
+  bool marked() const { return !stage.empty(); }
+  const double *point(VertexId v) const { return coords.data() + std::size_t(v) * dim; }
+  const VertexId *cell(CellId c) const { return cells.data() + std::size_t(c) * (dim + 1); }
+  VertexId *cell(CellId c) { return cells.data() + std::size_t(c) * (dim + 1); }
+};
+
+// A triangle mesh read from a plane z = c (c != 0, or with rounding noise in
+// z) keeps each vertex's z in this point array: refinement interpolates it
+// like any point array (exactly, for a plane), and the writers put it back
+// into the third coordinate instead of writing it as an array.
+inline constexpr const char *kPlaneZArray = "bisect:z";
+
+} // namespace bisect

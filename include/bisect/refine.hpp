@@ -1,0 +1,56 @@
+// Bisection and refine-to-conformity (ALGORITHMS.md §1, §6).
+#pragma once
+
+#include "bisect/mesh.hpp"
+
+#include <atomic>
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+namespace bisect {
+
+// The precision limit, always on: an edge (p, q) is bisected only while its
+// extent max_k |p_k - q_k| is at least kRelativeResolution times the largest
+// coordinate magnitude max_k max(|p_k|, |q_k|) of its ends, and at least
+// kAbsoluteResolution. Rounding the midpoint moves it by at most 2^-53 of
+// that magnitude, so every new vertex stays within 2^-13 of the edge's extent
+// of the true midpoint: children keep positive volumes and the shapes
+// bisection guarantees, and no midpoint coincides with an end. The absolute
+// floor keeps volumes and facet measures (up to the 6th power of a length in
+// 4D) far from underflow.
+inline constexpr double kRelativeResolution = 0x1p-40; // about 9.1e-13
+inline constexpr double kAbsoluteResolution = 0x1p-100; // about 7.9e-31
+
+struct RefineLimits {
+  std::size_t max_cells = std::numeric_limits<std::size_t>::max();
+  // Largest vertex count ids may reach (kNoVertex is reserved); lowered in tests.
+  std::size_t max_vertices = std::numeric_limits<VertexId>::max() - 1;
+  // Checked between passes; when set, the iteration is undone (Ctrl-C).
+  const std::atomic<bool> *cancel = nullptr;
+};
+
+struct RefineResult {
+  std::size_t selected = 0;       // cells bisected because they were selected
+  std::size_t bisections = 0;     // all bisections, closure included
+  std::size_t closure_passes = 0; // passes after the first
+  bool limit_reached = false;     // the iteration was undone: it would pass a limit
+  bool cancelled = false;         // the iteration was undone: limits.cancel was set
+  bool precision_reached = false; // the iteration was undone: it would bisect an
+                                  // edge below the precision limit (limit_reached
+                                  // is set too)
+  double kernel_seconds = 0;      // time in the bisection kernel proper (the rest
+                                  // finds the cells to close)
+};
+
+// Bisects every cell of `selected` (ids of a marked mesh, no duplicates), then
+// refines to conformity: cells with an edge whose midpoint exists are bisected
+// by their own refinement edge until none is left. Children inherit cell data;
+// point data is interpolated linearly at midpoints. When the result would pass
+// a limit the mesh is left exactly as it was and `limit_reached` is set.
+RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected, const RefineLimits &limits = {});
+
+// Bisects every cell once, then refines to conformity.
+RefineResult refine_uniform(Mesh &mesh);
+
+} // namespace bisect

@@ -1,0 +1,41 @@
+// Regions that select the cells to bisect, read from a JSON spec.
+//
+// A region answers one question: does a closed simplex touch it? Answers are
+// exact or conservative (never "no" for a simplex the region touches); each
+// region type documents which in region.cpp.
+#pragma once
+
+#include "bisect/mesh.hpp"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace bisect {
+
+class Region {
+public:
+  virtual ~Region() = default;
+  // `verts` holds dim+1 points of `dim` coordinates each (row after row).
+  virtual bool touches(const double *verts, int dim) const = 0;
+  // Every point the region contains lies in [lo, hi] (per coordinate);
+  // unbounded coordinates give +-infinity. Used to skip far cells quickly.
+  virtual void bounds(double *lo, double *hi, int dim) const = 0;
+  // A second look at the cells touches() chose in one iteration (`selected`:
+  // increasing ids into `mesh`); select_cells() calls it last. A region may
+  // drop cells here, e.g. the levelset indicator keeps the fraction where the
+  // function curves most. The default keeps them all.
+  virtual void filter(const Mesh &, std::vector<CellId> &) const {}
+};
+
+// Parses a region spec for a mesh of dimension `dim`. `origin` names where the
+// text came from (a file path) for error messages. Throws InputError.
+std::unique_ptr<Region> parse_region(const std::string &json_text, int dim,
+                                     const std::string &origin);
+// Reads and parses a spec file.
+std::unique_ptr<Region> read_region(const std::string &path, int dim);
+
+// The cells whose closed simplex touches the region, then region.filter().
+std::vector<CellId> select_cells(const Mesh &mesh, const Region &region);
+
+} // namespace bisect

@@ -1,0 +1,452 @@
+// Marking (ALGORITHMS.md §2-4; seeds 002 and 000). Every mark is the
+// consistent edge of some old sub-simplex in one global edge order, so
+// neighbours always agree on the marks of a shared face.
+#include "bisect/mark.hpp"
+
+#include "bisect/check.hpp"
+#include "core/dimension.hpp"
+#include "bisect/measure.hpp"
+#include "core/numbering.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string_view>
+
+namespace bisect {
+
+namespace {
+
+double squared_length(const EdgeOrder &o, VertexId a, VertexId b) {
+  if (a > b) std::swap(a, b);
+  const double *p = o.coords->data() + std::size_t(a) * o.dim;
+  const double *q = o.coords->data() + std::size_t(b) * o.dim;
+  double s = 0;
+  for (int k = 0; k < o.dim; ++k) {
+    double d = q[k] - p[k];
+    s += d * d;
+  }
+  return s;
+}
+
+} // namespace
+
+bool EdgeOrder::before(VertexId a, VertexId b, VertexId c, VertexId d) const {
+  if (a > b) std::swap(a, b);
+  if (c > d) std::swap(c, d);
+  if (marking == Marking::Longest) {
+    double lab = squared_length(*this, a, b), lcd = squared_length(*this, c, d);
+    if (lab != lcd) return lab > lcd;
+  } else if (marking == Marking::Explicit) {
+    auto find = [&](VertexId p, VertexId q) {
+      auto it = rank->find(edge_key(p, q));
+      return it == rank->end() ? std::uint64_t(1) << 32 : std::uint64_t(it->second);
+    };
+    std::uint64_t rab = find(a, b), rcd = find(c, d);
+    if (rab != rcd) return rab < rcd;
+  }
+  return a != c ? a < c : b < d;
+}
+
+EdgeOrder edge_order(const Mesh &mesh) {
+  return EdgeOrder{mesh.marking, &mesh.coords, mesh.dim, &mesh.edge_rank};
+}
+
+EdgePick consistent_edge(const EdgeOrder &order, const VertexId *ids, int count) {
+  EdgePick best{0, 1};
+  for (int i = 0; i < count; ++i)
+    for (int j = i + 1; j < count; ++j)
+      if ((i || j != 1) &&
+          order.before(ids[i], ids[j], ids[best.first], ids[best.second]))
+        best = EdgePick{i, j};
+  return best;
+}
+
+void triangle_tuple(const EdgeOrder &order, const VertexId *t, VertexId *out) {
+  EdgePick e = consistent_edge(order, t, 3);
+  int gamma = 3 - e.first - e.second;
+  VertexId a = t[e.first], g = t[gamma], b = t[e.second];
+  out[0] = a, out[1] = g, out[2] = b;
+}
+
+EdgePick opposite_edge(const EdgeOrder &order, const VertexId *x, int n, int t) {
+  EdgePick e = consistent_edge(order, x + t, n + 1 - t);
+  return EdgePick{t + e.first, t + e.second};
+}
+
+void opposite_children(const EdgeOrder &order, const VertexId *x, int n, int t, EdgePick edge,
+                       VertexId z, VertexId *c1, VertexId *c2, Stage &child_stage, int &child_tag) {
+  const int nv = n + 1;
+  child_stage = Stage::Opposite;
+  child_tag = t + 1;
+  for (int which = 0; which < 2; ++which) {
+    VertexId *out = which == 0 ? c1 : c2;
+    const int drop = which == 0 ? edge.first : edge.second;
+    VertexId old[5];
+    int n_old = 0;
+    for (int i = t; i < nv; ++i)
+      if (i != drop) old[n_old++] = x[i];
+    if (n_old == 3) { // the old part is a triangle: enter Maubach
+      triangle_tuple(order, old, out);
+      out[3] = z;
+      for (int i = 0; i < t && 4 + i < nv; ++i) out[4 + i] = x[i];
+      child_stage = Stage::Maubach;
+      child_tag = 2;
+    } else {
+      out[0] = z;
+      for (int i = 0; i < t && 1 + i < nv; ++i) out[1 + i] = x[i];
+      std::copy(old, old + n_old, out + 1 + t);
+    }
+  }
+}
+
+namespace {
+
+// For a tet with refinement edge (a, b) = ids[ea], ids[eb]: the marks of the
+// faces opposite a and b, as vertex pairs.
+struct TetMarks {
+  VertexId a, b;          // refinement edge
+  VertexId m1[2], m2[2];  // marks of the faces opposite a and opposite b
+  VertexId c, d;          // the two other vertices
+};
+
+TetMarks tet_marks(const EdgeOrder &order, const VertexId *ids) {
+  EdgePick e = consistent_edge(order, ids, 4);
+  TetMarks m{};
+  m.a = ids[e.first];
+  m.b = ids[e.second];
+  int rest[2], r = 0;
+  for (int i = 0; i < 4; ++i)
+    if (i != e.first && i != e.second) rest[r++] = i;
+  m.c = ids[rest[0]];
+  m.d = ids[rest[1]];
+  VertexId fa[3] = {m.b, m.c, m.d}, fb[3] = {m.a, m.c, m.d};
+  EdgePick p = consistent_edge(order, fa, 3), q = consistent_edge(order, fb, 3);
+  m.m1[0] = fa[p.first];
+  m.m1[1] = fa[p.second];
+  m.m2[0] = fb[q.first];
+  m.m2[1] = fb[q.second];
+  return m;
+}
+
+bool contains(const VertexId *e, VertexId v) { return e[0] == v || e[1] == v; }
+VertexId other(const VertexId *e, VertexId v) { return e[0] == v ? e[1] : e[0]; }
+
+} // namespace
+
+TetType classify_tet(const EdgeOrder &order, const VertexId *ids) {
+  TetMarks m = tet_marks(order, ids);
+  bool t1 = contains(m.m1, m.b), t2 = contains(m.m2, m.a); // mark touches the refinement edge
+  if (t1 && t2) return other(m.m1, m.b) == other(m.m2, m.a) ? TetType::Planar : TetType::Adjacent;
+  if (t1 || t2) return TetType::Mixed;
+  return TetType::Opposite;
+}
+
+namespace {
+
+char type_letter(TetType t) {
+  switch (t) {
+  case TetType::Planar: return 'P';
+  case TetType::Adjacent: return 'A';
+  case TetType::Opposite: return 'O';
+  case TetType::Mixed: return 'M';
+  }
+  return '?';
+}
+
+int letter_rank(char c) { return int(std::string_view("PAOM").find(c)); }
+
+} // namespace
+
+std::string simplex_type(const EdgeOrder &order, const VertexId *ids, int dim) {
+  if (dim == 3) return std::string(1, type_letter(classify_tet(order, ids)));
+  if (dim != 4) return "";
+  // Level 0 (a, b); level 1: the consistent edges of the tets opposite a and b.
+  EdgePick e = consistent_edge(order, ids, 5);
+  VertexId a = ids[e.first], b = ids[e.second];
+  VertexId ta[4], tb[4];
+  for (int i = 0, ka = 0, kb = 0; i < 5; ++i) {
+    if (ids[i] != a) ta[ka++] = ids[i];
+    if (ids[i] != b) tb[kb++] = ids[i];
+  }
+  EdgePick pa = consistent_edge(order, ta, 4), pb = consistent_edge(order, tb, 4);
+  VertexId ma[2] = {ta[pa.first], ta[pa.second]}, mb[2] = {tb[pb.first], tb[pb.second]};
+  bool t1 = contains(ma, b), t2 = contains(mb, a);
+  TetType alpha = t1 && t2 ? (other(ma, b) == other(mb, a) ? TetType::Planar : TetType::Adjacent)
+                  : t1 || t2 ? TetType::Mixed
+                             : TetType::Opposite;
+  // Level 2 relative to level 1 is the tet classification of each face.
+  char beta = type_letter(classify_tet(order, ta)), gamma = type_letter(classify_tet(order, tb));
+  if (letter_rank(gamma) < letter_rank(beta)) std::swap(beta, gamma);
+  return std::string{type_letter(alpha), '_', beta, gamma};
+}
+
+void force_type(Mesh &mesh, const std::string &type) {
+  const int n = mesh.dim, nv = n + 1;
+  if (mesh.num_cells() != 1 || (n != 3 && n != 4))
+    throw std::invalid_argument("forced types exist for one tetrahedron or one pentatope only");
+  const VertexId *x = mesh.cell(0);
+  std::vector<std::uint64_t> edges;
+  for (int i = 0; i < nv; ++i)
+    for (int j = i + 1; j < nv; ++j) edges.push_back(edge_key(x[i], x[j]));
+  // Every ranking of the edges is a global edge order; try them in a fixed
+  // pseudo-random sequence (deterministic output) and keep the first whose
+  // marks have the type asked for.
+  std::vector<std::uint32_t> perm(edges.size());
+  for (std::size_t i = 0; i < perm.size(); ++i) perm[i] = std::uint32_t(i);
+  std::unordered_map<std::uint64_t, std::uint32_t> rank;
+  EdgeOrder order{Marking::Explicit, &mesh.coords, n, &rank};
+  std::uint64_t state = 0x9e3779b97f4a7c15ull;
+  std::vector<std::string> seen;
+  for (int attempt = 0; attempt < 200000; ++attempt) {
+    for (std::size_t i = perm.size() - 1; i > 0; --i) { // Fisher-Yates, splitmix64
+      state += 0x9e3779b97f4a7c15ull;
+      std::uint64_t z = state;
+      z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+      z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+      z ^= z >> 31;
+      std::swap(perm[i], perm[z % (i + 1)]);
+    }
+    rank.clear();
+    for (std::size_t i = 0; i < edges.size(); ++i) rank[edges[i]] = perm[i];
+    std::string t = simplex_type(order, x, n);
+    if (t == type) {
+      mesh.edge_rank = rank;
+      mark_mesh(mesh, Marking::Explicit);
+      return;
+    }
+    if (std::find(seen.begin(), seen.end(), t) == seen.end()) seen.push_back(t);
+  }
+  std::sort(seen.begin(), seen.end());
+  std::string list;
+  for (const std::string &t : seen) list += (list.empty() ? "" : ", ") + t;
+  throw std::invalid_argument("type " + type + " does not arise from any edge order of a " +
+                              (n == 3 ? std::string("tetrahedron") : std::string("pentatope")) +
+                              "; the types that do: " + list);
+}
+
+void mark_mesh(Mesh &mesh, Marking marking) {
+  const int n = mesh.dim, nv = n + 1;
+  const std::size_t nc = mesh.num_cells();
+  mesh.marking = marking;
+  mesh.stage.assign(nc, Stage::Maubach);
+  mesh.tag.assign(nc, std::uint8_t(2));
+  EdgeOrder order = edge_order(mesh);
+  for (std::size_t c = 0; c < nc; ++c) {
+    VertexId *x = mesh.cell(CellId(c));
+    if (marking == Marking::Sorted) {
+      std::sort(x, x + nv);
+      mesh.tag[c] = std::uint8_t(n);
+    } else if (n == 2) {
+      VertexId t[3] = {x[0], x[1], x[2]};
+      triangle_tuple(order, t, x);
+    } else if (n == 3) {
+      TetMarks m = tet_marks(order, x);
+      bool planar = contains(m.m1, m.b) && contains(m.m2, m.a) &&
+                    other(m.m1, m.b) == other(m.m2, m.a);
+      if (planar) { // Pu: refinement (a, b), marks (b, c), (a, c) -> (a, c, b, d)_2
+        VertexId c3 = other(m.m1, m.b), d3 = (c3 == m.c) ? m.d : m.c;
+        x[0] = m.a, x[1] = c3, x[2] = m.b, x[3] = d3;
+      } else {
+        mesh.stage[c] = Stage::Opposite;
+        mesh.tag[c] = 0;
+      }
+    } else {
+      mesh.stage[c] = Stage::Opposite;
+      mesh.tag[c] = 0;
+    }
+  }
+}
+
+namespace {
+
+// The refinement one cell would make of one of its facets, found by bisecting
+// the cell symbolically (tuples only; new vertices get labels above every
+// mesh id, one label per split edge, shared by the two sides of the facet so
+// that the same edge gets the same label). The facet's piece tree is walked
+// depth first, state_check_levels(Dim) levels deep; each piece records the edge it
+// is split by, and its two halves follow in a fixed order (the half keeping
+// the smaller-labelled end first). A cell bisection whose edge is not in the
+// piece moves the piece into the child that holds it, unsplit.
+template <int Dim> class FacetWalk {
+  static constexpr int N = Dim + 1;
+
+public:
+  FacetWalk(const EdgeOrder &order, VertexId first_label) : order_(order), first_(first_label) {}
+
+  // Side one: records the piece tree of facet `opposite` (local index of the
+  // vertex not in it) of the cell x. Side two: compares with what was recorded.
+  void record(const VertexId *x, Stage s, int t, int opposite) {
+    mids_.clear();
+    seq_.clear();
+    comparing_ = false;
+    start(x, s, t, opposite);
+  }
+  bool same(const VertexId *x, Stage s, int t, int opposite) {
+    comparing_ = true;
+    pos_ = 0;
+    differs_ = false;
+    start(x, s, t, opposite);
+    return !differs_ && pos_ == seq_.size();
+  }
+
+private:
+  void start(const VertexId *x, Stage s, int t, int opposite) {
+    VertexId piece[Dim];
+    for (int i = 0, k = 0; i < N; ++i)
+      if (i != opposite) piece[k++] = x[i];
+    walk(x, s, t, piece, 0);
+  }
+
+  VertexId label(VertexId a, VertexId b) {
+    const std::uint64_t key = edge_key(a, b);
+    for (const auto &[k, v] : mids_)
+      if (k == key) return v;
+    const VertexId z = first_ + VertexId(mids_.size());
+    mids_.emplace_back(key, z);
+    return z;
+  }
+
+  void note(std::uint64_t key) {
+    if (!comparing_) {
+      seq_.push_back(key);
+    } else if (pos_ >= seq_.size() || seq_[pos_++] != key) {
+      differs_ = true;
+    }
+  }
+
+  static bool holds(const VertexId *ids, int count, VertexId v) {
+    return std::find(ids, ids + count, v) != ids + count;
+  }
+
+  void walk(const VertexId *x0, Stage s, int t, const VertexId *piece, int level) {
+    VertexId x[N], c1[N], c2[N];
+    std::copy(x0, x0 + N, x);
+    // A bisection that misses the piece replaces the vertex opposite it, so
+    // a few steps always reach one that splits it; the bound is a guard.
+    for (int step = 0; step < 4 * N && !differs_; ++step) {
+      VertexId a, b, z;
+      Stage s1 = Stage::Maubach;
+      int t1 = 0;
+      if (s == Stage::Maubach) {
+        a = x[0];
+        b = x[t];
+        z = label(a, b);
+        maubach_children<Dim>(x, t, z, c1, c2);
+        t1 = maubach_child_tag(t, Dim);
+      } else if constexpr (Dim >= 3) {
+        const EdgePick e = opposite_edge(order_, x, Dim, t);
+        a = x[e.first];
+        b = x[e.second];
+        z = label(a, b);
+        opposite_children(order_, x, Dim, t, e, z, c1, c2, s1, t1);
+      } else {
+        break; // no Stage 1 in 2D (decode_state rejects it)
+      }
+      const bool has_a = holds(piece, Dim, a), has_b = holds(piece, Dim, b);
+      // The child holding a (and not b), and the one holding b.
+      const VertexId *with_a = holds(c1, N, a) ? c1 : c2, *with_b = with_a == c1 ? c2 : c1;
+      if (has_a && has_b) {
+        note(edge_key(a, b));
+        if (level + 1 == state_check_levels(Dim) || differs_) return;
+        VertexId keep_a[Dim], keep_b[Dim];
+        for (int i = 0; i < Dim; ++i) {
+          keep_a[i] = piece[i] == b ? z : piece[i];
+          keep_b[i] = piece[i] == a ? z : piece[i];
+        }
+        if (a < b) {
+          walk(with_a, s1, t1, keep_a, level + 1);
+          walk(with_b, s1, t1, keep_b, level + 1);
+        } else {
+          walk(with_b, s1, t1, keep_b, level + 1);
+          walk(with_a, s1, t1, keep_a, level + 1);
+        }
+        return;
+      }
+      std::copy(has_a ? with_a : with_b, (has_a ? with_a : with_b) + N, x);
+      s = s1;
+      t = t1;
+    }
+    note(~std::uint64_t(0)); // no split within the guard: cannot match a valid side
+  }
+
+  const EdgeOrder &order_;
+  VertexId first_;
+  std::vector<std::pair<std::uint64_t, VertexId>> mids_;
+  std::vector<std::uint64_t> seq_;
+  std::size_t pos_ = 0;
+  bool comparing_ = false, differs_ = false;
+};
+
+std::string id_tuple(const VertexId *x, int count) {
+  std::string s = "(";
+  for (int i = 0; i < count; ++i) s += (i ? ", " : "") + std::to_string(x[i]);
+  return s + ")";
+}
+
+} // namespace
+
+std::string check_state_consistency(const Mesh &mesh) {
+  if (mesh.dim < 3 || !mesh.marked() || mesh.num_cells() < 2) return {};
+  const EdgeOrder order = edge_order(mesh);
+  const VertexId first_label = VertexId(mesh.num_vertices());
+  if (std::size_t(first_label) + 4096 >= std::size_t(kNoVertex)) return {}; // no room for labels
+  std::string failure;
+  dispatch(mesh.dim, [&]<int D>() {
+    FacetWalk<D> walk(order, first_label);
+    // Stevenson's reflected neighbours: two Maubach cells with one tag whose
+    // tuples (or one tuple and the other's reflection) differ only in the
+    // vertex opposite the facet have the same descendants on it.
+    auto reflected = [&](CellId a, int i, CellId b, int j) {
+      if (mesh.stage[a] != Stage::Maubach || mesh.stage[b] != Stage::Maubach ||
+          mesh.tag[a] != mesh.tag[b])
+        return false;
+      const int d = mesh.tag[a];
+      const VertexId *x = mesh.cell(a), *y = mesh.cell(b);
+      for (int flip = 0; flip < 2; ++flip) {
+        const int ja = flip && i <= d ? d - i : i; // position of a's opposite vertex
+        if (ja != j) continue;
+        bool same = true;
+        for (int k = 0; k <= D && same; ++k) {
+          const int from = flip && k <= d ? d - k : k;
+          same = k == j || x[from] == y[k];
+        }
+        if (same) return true;
+      }
+      return false;
+    };
+    for_each_interior_facet(mesh, [&](CellId a, int i, CellId b, int j) {
+      if (reflected(a, i, b, j)) return true;
+      walk.record(mesh.cell(a), mesh.stage[a], mesh.tag[a], i);
+      if (walk.same(mesh.cell(b), mesh.stage[b], mesh.tag[b], j)) return true;
+      VertexId facet[4];
+      for (int k = 0, m = 0; k <= D; ++k)
+        if (k != i) facet[m++] = mesh.cell(a)[k];
+      std::sort(facet, facet + D);
+      failure = "cells " + std::to_string(a) + " and " + std::to_string(b) +
+                " would bisect their shared facet " + id_tuple(facet, D) + " differently";
+      return false;
+    });
+  });
+  return failure;
+}
+
+std::optional<Marking> parse_marking(const std::string &name) {
+  if (name == "index") return Marking::Index;
+  if (name == "longest") return Marking::Longest;
+  if (name == "sorted") return Marking::Sorted;
+  if (name == "explicit") return Marking::Explicit;
+  return std::nullopt;
+}
+
+const char *marking_name(Marking marking) {
+  switch (marking) {
+  case Marking::Index: return "index";
+  case Marking::Longest: return "longest";
+  case Marking::Sorted: return "sorted";
+  case Marking::Explicit: return "explicit";
+  }
+  return "?";
+}
+
+} // namespace bisect

@@ -1,0 +1,355 @@
+// Refine to conformity by bisection (ALGORITHMS.md §1, §6; seed 000 Procedure
+// 1; seed 002 §4). The kernels are templated on the dimension and
+// instantiated for 2, 3 and 4 in one place (dispatch at the bottom).
+//
+// One pass bisects a list of cells in place: child 1 takes the parent's slot,
+// child 2 is appended. Midpoints are shared through a hash map from the edge
+// (sorted id pair) to the new vertex, cleared after every iteration: once an
+// iteration is conforming no cell has an edge that was bisected.
+#include "bisect/refine.hpp"
+
+#include "core/dimension.hpp"
+#include "bisect/mark.hpp"
+#include "core/numbering.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace bisect {
+
+namespace {
+
+// Open-addressing map from an edge key (min << 32 | max, never 0) to the id
+// of its midpoint.
+class MidpointMap {
+public:
+  static std::uint64_t key(VertexId a, VertexId b) {
+    if (a > b) std::swap(a, b);
+    return std::uint64_t(a) << 32 | b;
+  }
+  VertexId find(std::uint64_t k) const {
+    if (size_ == 0) return kNoVertex;
+    for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
+      if (keys_[i] == k) return values_[i];
+      if (keys_[i] == 0) return kNoVertex;
+    }
+  }
+  // Returns the slot's value, inserting `value` when k is absent.
+  VertexId insert(std::uint64_t k, VertexId value) {
+    if ((size_ + 1) * 2 > keys_.size()) grow();
+    for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
+      if (keys_[i] == k) return values_[i];
+      if (keys_[i] == 0) {
+        keys_[i] = k;
+        values_[i] = value;
+        ++size_;
+        return value;
+      }
+    }
+  }
+  void clear() {
+    keys_.clear();
+    keys_.shrink_to_fit();
+    values_.clear();
+    values_.shrink_to_fit();
+    size_ = 0;
+    mask_ = 0;
+  }
+
+private:
+  std::size_t slot(std::uint64_t k) const {
+    return std::size_t((k * 0x9E3779B97F4A7C15ull) >> 20) & mask_;
+  }
+  void grow() {
+    std::vector<std::uint64_t> keys = std::move(keys_);
+    std::vector<VertexId> values = std::move(values_);
+    std::size_t cap = std::max<std::size_t>(1024, keys.size() * 2);
+    keys_.assign(cap, 0);
+    values_.assign(cap, kNoVertex);
+    mask_ = cap - 1;
+    size_ = 0;
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (keys[i]) insert(keys[i], values[i]);
+  }
+  std::vector<std::uint64_t> keys_;
+  std::vector<VertexId> values_;
+  std::size_t size_ = 0, mask_ = 0;
+};
+
+struct LimitReached {};
+struct PrecisionReached {};
+struct Cancelled {};
+
+template <int Dim> class Refiner {
+  static constexpr int N = Dim + 1;
+
+public:
+  Refiner(Mesh &mesh, const RefineLimits &limits)
+      : m_(mesh), order_(edge_order(mesh)), limits_(limits), nc0_(mesh.num_cells()),
+        nv0_(mesh.num_vertices()), endpoint_(mesh.num_vertices(), 0) {
+    // The undo log costs memory: keep it only when a limit could trip.
+    logging_ = limits.max_cells != std::numeric_limits<std::size_t>::max() ||
+               nv0_ + 16 * nc0_ >= limits.max_vertices || limits.cancel;
+  }
+
+  RefineResult run(std::vector<CellId> work) {
+    RefineResult result;
+    result.selected = work.size();
+    // Closure bisects cells about as coarse as the selected ones or coarser;
+    // when a selected cell's edge is near the precision limit, keep the undo
+    // log so that passing it anywhere undoes the iteration.
+    for (CellId c : work)
+      if (!logging_ && resolution(refinement_edge(c)) < 1024) logging_ = true;
+    try {
+      std::vector<std::uint8_t> flag;
+      std::vector<std::uint64_t> seen;
+      std::vector<CellId> candidates;
+      while (!work.empty()) {
+        if (limits_.cancel && limits_.cancel->load()) throw Cancelled{};
+        const std::size_t cells_before = m_.num_cells(), verts_before = m_.num_vertices();
+        reserve(work.size());
+        const auto t0 = std::chrono::steady_clock::now();
+        for (CellId c : work) bisect(c);
+        result.kernel_seconds +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        result.bisections += work.size();
+        // Candidates for the next pass: the children just made, and every cell
+        // holding both ends of an edge bisected in this pass (ALGORITHMS §6).
+        // A bit per cell keeps each candidate once.
+        seen.assign((m_.num_cells() + 63) / 64, 0);
+        candidates.clear();
+        auto add = [&](std::size_t c) {
+          std::uint64_t bit = std::uint64_t(1) << (c & 63);
+          if (!(seen[c >> 6] & bit)) {
+            seen[c >> 6] |= bit;
+            candidates.push_back(CellId(c));
+          }
+        };
+        for (CellId c : work) add(c);
+        for (std::size_t c = cells_before; c < m_.num_cells(); ++c) add(c);
+        if (m_.num_vertices() > verts_before) {
+          flag.assign(m_.num_vertices(), 0);
+          for (std::size_t v = verts_before; v < m_.num_vertices(); ++v) {
+            flag[parents_[2 * (v - nv0_)]] = 1;
+            flag[parents_[2 * (v - nv0_) + 1]] = 1;
+          }
+          for (std::size_t c = 0; c < cells_before; ++c) {
+            const VertexId *x = m_.cell(CellId(c));
+            int hits = 0;
+            for (int i = 0; i < N; ++i) hits += flag[x[i]];
+            if (hits >= 2) add(c);
+          }
+        }
+        work.clear();
+        for (CellId c : candidates)
+          if (has_hanging_edge(c)) work.push_back(c);
+        if (!work.empty()) ++result.closure_passes;
+      }
+    } catch (const LimitReached &) {
+      undo();
+      result.limit_reached = true;
+      return result;
+    } catch (const PrecisionReached &) {
+      undo();
+      result.limit_reached = result.precision_reached = true;
+      return result;
+    } catch (const Cancelled &) {
+      undo();
+      result.cancelled = true;
+      return result;
+    }
+    finish();
+    return result;
+  }
+
+private:
+  std::pair<VertexId, VertexId> refinement_edge(CellId c) const {
+    const VertexId *x = m_.cell(c);
+    if (m_.stage[c] == Stage::Maubach) return {x[0], x[m_.tag[c]]};
+    const EdgePick e = opposite_edge(order_, x, Dim, m_.tag[c]);
+    return {x[e.first], x[e.second]};
+  }
+
+  // The edge's extent over the smallest extent it may have to be bisected
+  // (kRelativeResolution, kAbsoluteResolution): below 1 it must not be.
+  double resolution(std::pair<VertexId, VertexId> edge) const {
+    const double *p = m_.point(edge.first), *q = m_.point(edge.second);
+    double extent = 0, magnitude = 0;
+    for (int k = 0; k < Dim; ++k) {
+      extent = std::max(extent, std::abs(p[k] - q[k]));
+      magnitude = std::max({magnitude, std::abs(p[k]), std::abs(q[k])});
+    }
+    return extent / std::max(kRelativeResolution * magnitude, kAbsoluteResolution);
+  }
+
+  bool has_hanging_edge(CellId c) const {
+    const VertexId *x = m_.cell(c);
+    for (const LocalEdge &e : kLocalEdges<Dim>)
+      if (endpoint_[x[e.first]] && endpoint_[x[e.second]] &&
+          mids_.find(MidpointMap::key(x[e.first], x[e.second])) != kNoVertex)
+        return true;
+    return false;
+  }
+
+  void reserve(std::size_t extra) {
+    std::size_t need = m_.num_cells() + extra;
+    if (need > limits_.max_cells && logging_) throw LimitReached{};
+    if (m_.cells.capacity() < need * N) {
+      std::size_t cap = std::max(need, m_.num_cells() + m_.num_cells() / 4);
+      m_.cells.reserve(cap * N);
+      m_.stage.reserve(cap);
+      m_.tag.reserve(cap);
+    }
+  }
+
+  VertexId midpoint(VertexId a, VertexId b) {
+    std::uint64_t k = MidpointMap::key(a, b);
+    VertexId next = VertexId(m_.num_vertices());
+    VertexId z = mids_.insert(k, next);
+    if (z != next) return z;
+    if (std::size_t(next) + 1 > limits_.max_vertices) {
+      if (logging_) throw LimitReached{};
+      throw CheckError("vertex ids would overflow 32 bits");
+    }
+    if (!(resolution({a, b}) >= 1)) {
+      if (logging_) throw PrecisionReached{};
+      throw CheckError("closure would bisect an edge below the precision limit");
+    }
+    const double *p = m_.point(a), *q = m_.point(b);
+    double mid[Dim];
+    for (int k2 = 0; k2 < Dim; ++k2) mid[k2] = 0.5 * (p[k2] + q[k2]);
+    m_.coords.insert(m_.coords.end(), mid, mid + Dim);
+    parents_.push_back(a);
+    parents_.push_back(b);
+    endpoint_.push_back(0);
+    endpoint_[a] = endpoint_[b] = 1;
+    return next;
+  }
+
+  void append(const VertexId *x, Stage s, int t, CellId source) {
+    m_.cells.insert(m_.cells.end(), x, x + N);
+    m_.stage.push_back(s);
+    m_.tag.push_back(std::uint8_t(t));
+    origin_.push_back(source < nc0_ ? source : origin_[source - nc0_]);
+  }
+
+  // Bisects cell c by its refinement edge: child 1 in place, child 2 appended.
+  void bisect(CellId c) {
+    VertexId *slot = m_.cell(c);
+    VertexId x[N];
+    std::copy(slot, slot + N, x);
+    const Stage s = m_.stage[c];
+    const int t = m_.tag[c];
+    if (logging_) {
+      UndoEntry u{c, {}, s, std::uint8_t(t)};
+      std::copy(x, x + N, u.x);
+      log_.push_back(u);
+    }
+    if (s == Stage::Maubach) {
+      VertexId c1[N], c2[N];
+      VertexId z = midpoint(x[0], x[t]);
+      maubach_children<Dim>(x, t, z, c1, c2);
+      const int t2 = maubach_child_tag(t, Dim);
+      std::copy(c1, c1 + N, m_.cell(c));
+      m_.tag[c] = std::uint8_t(t2);
+      append(c2, Stage::Maubach, t2, c);
+      return;
+    }
+    if constexpr (Dim >= 3) bisect_stage1(c, x, t);
+    else throw CheckError("Stage 1 cell in a 2D mesh");
+  }
+
+  // Stage 1: x = (new vertices (t of them), old sub-simplex).
+  void bisect_stage1(CellId c, const VertexId *x, int t) {
+    VertexId c1[N], c2[N];
+    const EdgePick e = opposite_edge(order_, x, Dim, t);
+    const VertexId z = midpoint(x[e.first], x[e.second]);
+    Stage child_stage;
+    int child_tag;
+    opposite_children(order_, x, Dim, t, e, z, c1, c2, child_stage, child_tag);
+    std::copy(c1, c1 + N, m_.cell(c));
+    m_.stage[c] = child_stage;
+    m_.tag[c] = std::uint8_t(child_tag);
+    append(c2, child_stage, child_tag, c);
+  }
+
+  void undo() {
+    for (auto it = log_.rbegin(); it != log_.rend(); ++it) {
+      std::copy(it->x, it->x + N, m_.cell(it->c));
+      m_.stage[it->c] = it->s;
+      m_.tag[it->c] = it->t;
+    }
+    m_.cells.resize(nc0_ * N);
+    m_.stage.resize(nc0_);
+    m_.tag.resize(nc0_);
+    m_.coords.resize(nv0_ * Dim);
+    m_.cells.shrink_to_fit();
+  }
+
+  // Children inherit cell data; point data is interpolated at midpoints,
+  // except label arrays (is_label_array), which new vertices get as kNoLabel.
+  void finish() {
+    for (DataArray &a : m_.cell_data) {
+      const std::size_t k = a.components;
+      a.values.resize(m_.num_cells() * k);
+      for (std::size_t i = 0; i < origin_.size(); ++i)
+        for (std::size_t j = 0; j < k; ++j)
+          a.values[(nc0_ + i) * k + j] = a.values[std::size_t(origin_[i]) * k + j];
+    }
+    for (DataArray &a : m_.point_data) {
+      const std::size_t k = a.components;
+      if (is_label_array(a.name)) {
+        a.values.resize(m_.num_vertices() * k, kNoLabel);
+        continue;
+      }
+      a.values.resize(m_.num_vertices() * k);
+      for (std::size_t i = 0; i < parents_.size() / 2; ++i)
+        for (std::size_t j = 0; j < k; ++j)
+          a.values[(nv0_ + i) * k + j] = 0.5 * (a.values[parents_[2 * i] * k + j] +
+                                                a.values[parents_[2 * i + 1] * k + j]);
+    }
+  }
+
+  struct UndoEntry {
+    CellId c;
+    VertexId x[N];
+    Stage s;
+    std::uint8_t t;
+  };
+
+  Mesh &m_;
+  EdgeOrder order_;
+  RefineLimits limits_;
+  std::size_t nc0_, nv0_;
+  bool logging_ = false;
+  MidpointMap mids_;
+  std::vector<CellId> origin_;    // per appended cell: the input cell it descends from
+  std::vector<VertexId> parents_; // per new vertex: the two ends of its edge
+  std::vector<std::uint8_t> endpoint_; // per vertex: 1 if an end of an edge bisected so far
+  std::vector<UndoEntry> log_;
+};
+
+template <int Dim>
+RefineResult refine_dim(Mesh &mesh, const std::vector<CellId> &selected, const RefineLimits &limits) {
+  Refiner<Dim> r(mesh, limits);
+  return r.run(selected);
+}
+
+} // namespace
+
+RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected, const RefineLimits &limits) {
+  if (!mesh.marked()) throw CheckError("refine: the mesh is not marked");
+  RefineLimits l = limits;
+  l.max_cells = std::min<std::size_t>(l.max_cells, kNoCell - 1);
+  return dispatch(mesh.dim, [&]<int D>() { return refine_dim<D>(mesh, selected, l); });
+}
+
+RefineResult refine_uniform(Mesh &mesh) {
+  std::vector<CellId> all(mesh.num_cells());
+  for (std::size_t c = 0; c < all.size(); ++c) all[c] = CellId(c);
+  return refine(mesh, all);
+}
+
+} // namespace bisect

@@ -1,0 +1,148 @@
+// Format dispatch by extension, input checks shared by all readers, and the
+// write-to-temporary-then-rename rule for output (STYLE.md §6).
+#include "bisect/io.hpp"
+
+#include "bisect/output.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <system_error>
+#include <unistd.h>
+
+namespace bisect {
+namespace {
+
+namespace fs = std::filesystem;
+
+enum class Format { Vtu, Msh };
+
+// The format named by the (case-insensitive) extension of `path`.
+Format format_of(const std::string &path) {
+  std::string ext = fs::path(path).extension().string();
+  std::string lower = ext;
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  if (lower == ".vtu")
+    return Format::Vtu;
+  if (lower == ".msh")
+    return Format::Msh;
+  throw InputError(path, "unknown mesh format '" + ext + "' (expected .vtu or .msh)");
+}
+
+// Fails with a clear reason unless `path` is a readable, non-empty file.
+void check_readable_file(const std::string &path) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (ec || !fs::exists(st))
+    throw InputError(path, "cannot open: " +
+                               (ec ? ec.message() : std::string(std::strerror(ENOENT))));
+  if (fs::is_directory(st))
+    throw InputError(path, "is a directory");
+  if (!fs::is_regular_file(st))
+    throw InputError(path, "not a regular file");
+  std::FILE *f = std::fopen(path.c_str(), "rb");
+  if (!f)
+    throw InputError(path, std::string("cannot open: ") + std::strerror(errno));
+  const bool empty = std::fgetc(f) == EOF;
+  std::fclose(f);
+  if (empty)
+    throw InputError(path, "empty file");
+}
+
+// Errors from the writer name the file written into; report them against
+// the output's name instead.
+std::string strip_prefix(const std::string &what, const std::string &prefix) {
+  return what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what;
+}
+
+void write_as(Format format, const std::string &path, const Mesh &mesh,
+              const WriteOptions &options) {
+  if (format == Format::Vtu)
+    write_vtu(path, mesh, options.compression);
+  else
+    write_msh(path, mesh);
+}
+
+} // namespace
+
+namespace {
+
+// A triangle mesh off z = 0 (the readers put its z into kPlaneZArray) is
+// accepted when it lies in one plane z = c up to 1e-12 of its extent; the
+// array then stays (refinement interpolates it, the writers put it back),
+// unless every z is 0. Anything less flat is a surface in 3D.
+void settle_plane(Mesh &mesh, const std::string &path, Format format) {
+  if (mesh.dim != 2) return;
+  auto it = std::find_if(mesh.point_data.begin(), mesh.point_data.end(),
+                         [](const DataArray &a) { return a.name == kPlaneZArray; });
+  if (it == mesh.point_data.end() || it->values.empty()) return;
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+    const double x[3] = {mesh.point(VertexId(v))[0], mesh.point(VertexId(v))[1], it->values[v]};
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], x[k]);
+      hi[k] = std::max(hi[k], x[k]);
+    }
+  }
+  const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], std::abs(lo[2]), std::abs(hi[2])});
+  if (hi[2] - lo[2] > 1e-12 * extent) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "the triangles are not in one plane z = c (z goes from %.17g to %.17g)",
+                  lo[2], hi[2]);
+    std::string what = std::string(buf) + "; bisect refines planar triangle meshes, tetrahedra and 4D meshes";
+    if (format == Format::Msh)
+      what += " (if these triangles bound a volume, its tetrahedra are missing: is a Physical Volume "
+              "missing in the .geo?)";
+    throw InputError(path, what);
+  }
+  if (lo[2] == 0 && hi[2] == 0) mesh.point_data.erase(it);
+}
+
+} // namespace
+
+Mesh read_mesh(const std::string &path) {
+  check_readable_file(path);
+  const Format format = format_of(path);
+  Mesh mesh = format == Format::Vtu ? read_vtu(path) : read_msh(path);
+  settle_plane(mesh, path, format);
+  return mesh;
+}
+
+static Format format_named(const std::string &name, const std::string &format) {
+  if (format.empty()) return format_of(name);
+  if (format == "vtu") return Format::Vtu;
+  if (format == "msh") return Format::Msh;
+  throw InputError(name, "unknown format '" + format + "' (expected vtu or msh)");
+}
+
+void write_mesh_file(const std::string &file, const std::string &name, const Mesh &mesh,
+                     const WriteOptions &options) {
+  const Format format = format_named(name, options.format);
+  try {
+    write_as(format, file, mesh, options);
+  } catch (const InputError &e) {
+    throw InputError(name, strip_prefix(e.what(), file + ": "));
+  } catch (const CheckError &e) {
+    throw CheckError(name + ": " + strip_prefix(e.what(), file + ": "));
+  }
+}
+
+void check_output_format(const std::string &name, int dim, const std::string &format_name) {
+  const Format format = format_named(name, format_name);
+  if (format == Format::Msh && dim == 4)
+    throw InputError(name, "a .msh file cannot hold a 4D mesh; write .vtu");
+}
+
+void write_mesh(const std::string &path, const Mesh &mesh, const WriteOptions &options) {
+  OutputSet out({}, true);
+  const int h = out.add(path);
+  write_mesh_file(out.file(h), path, mesh, options);
+  out.commit();
+}
+
+} // namespace bisect

@@ -1,0 +1,1423 @@
+// Gmsh .msh files: reading MSH 2.2 and 4.1 (ASCII and binary), writing
+// MSH 4.1 binary.
+//
+// Format reference: the Gmsh manual, section "MSH file format" (versions 4.1
+// and 2.2). Facts this file relies on:
+//  - `$MeshFormat` gives "version file-type data-size"; a binary file follows
+//    it with the int 1 written in the machine's byte order.
+//  - 2.2 binary: node = int tag + 3 doubles; elements come in blocks headed by
+//    three ints (type, count, number of tags), each element being
+//    int tag, int tags[], int nodes[].
+//  - 4.1 binary: counts and tags are size_t (data-size bytes), entity
+//    dimensions/tags and element types are int; nodes come in entity blocks
+//    (all tags, then all coordinates).
+//  - $NodeData/$ElementData: string, real and integer tags in ASCII
+//    (integer tags: time step, components, number of entries), then entries
+//    "int tag, double values[components]" (binary in binary files).
+//
+// The reader keeps the linear simplices of the highest dimension; everything
+// it rejects is reported as InputError(path, "line N: ...") for ASCII files
+// and "byte offset N: ..." for binary ones. A count read from the file never
+// reserves more than the rest of the file can hold, and every loop it drives
+// consumes input, so a corrupted count ends in an error where the data runs
+// out instead of in a huge allocation or a long loop.
+//
+// Gmsh tags become the cell arrays "gmsh:physical" and "gmsh:geometrical":
+// in 2.2 the first two element tags (when elements carry two tags); in 4.1
+// the element block's entity tag and that entity's first physical tag in
+// $Entities (when the file has $Entities; "gmsh:physical" only when some
+// cell's entity has a physical tag). The writer omits $Entities for a mesh
+// without these arrays, so that reading gives none back.
+#include "bisect/io.hpp"
+#include "bisect/output.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <set>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace bisect {
+namespace {
+
+constexpr std::size_t kNone = std::size_t(-1);
+constexpr std::uint32_t kNoIndex = std::numeric_limits<std::uint32_t>::max();
+
+// ---------------------------------------------------------------------------
+// Gmsh element types
+
+struct ElementType {
+  int dim = -1; // -1: a type this reader does not know
+  int nodes = 0;
+  bool simplex = false;
+  bool linear = false;
+  const char *name = "";
+};
+
+// The Gmsh element types that occur in practice (GmshDefines.h numbering).
+ElementType element_type(long long type) {
+  switch (type) {
+  case 1:
+    return {1, 2, true, true, "2-node line"};
+  case 2:
+    return {2, 3, true, true, "3-node triangle"};
+  case 3:
+    return {2, 4, false, true, "4-node quadrangle"};
+  case 4:
+    return {3, 4, true, true, "4-node tetrahedron"};
+  case 5:
+    return {3, 8, false, true, "8-node hexahedron"};
+  case 6:
+    return {3, 6, false, true, "6-node prism"};
+  case 7:
+    return {3, 5, false, true, "5-node pyramid"};
+  case 8:
+    return {1, 3, true, false, "3-node line"};
+  case 9:
+    return {2, 6, true, false, "6-node triangle"};
+  case 10:
+    return {2, 9, false, false, "9-node quadrangle"};
+  case 11:
+    return {3, 10, true, false, "10-node tetrahedron"};
+  case 12:
+    return {3, 27, false, false, "27-node hexahedron"};
+  case 13:
+    return {3, 18, false, false, "18-node prism"};
+  case 14:
+    return {3, 14, false, false, "14-node pyramid"};
+  case 15:
+    return {0, 1, true, true, "point"};
+  case 16:
+    return {2, 8, false, false, "8-node quadrangle"};
+  case 17:
+    return {3, 20, false, false, "20-node hexahedron"};
+  case 18:
+    return {3, 15, false, false, "15-node prism"};
+  case 19:
+    return {3, 13, false, false, "13-node pyramid"};
+  case 20:
+    return {2, 9, true, false, "9-node triangle"};
+  case 21:
+    return {2, 10, true, false, "10-node triangle"};
+  case 22:
+    return {2, 12, true, false, "12-node triangle"};
+  case 23:
+    return {2, 15, true, false, "15-node triangle"};
+  case 24:
+    return {2, 15, true, false, "15-node incomplete triangle"};
+  case 25:
+    return {2, 21, true, false, "21-node triangle"};
+  case 26:
+    return {1, 4, true, false, "4-node line"};
+  case 27:
+    return {1, 5, true, false, "5-node line"};
+  case 28:
+    return {1, 6, true, false, "6-node line"};
+  case 29:
+    return {3, 20, true, false, "20-node tetrahedron"};
+  case 30:
+    return {3, 35, true, false, "35-node tetrahedron"};
+  case 31:
+    return {3, 56, true, false, "56-node tetrahedron"};
+  case 92:
+    return {3, 64, false, false, "64-node hexahedron"};
+  case 93:
+    return {3, 125, false, false, "125-node hexahedron"};
+  default:
+    return {};
+  }
+}
+
+constexpr int kTriangle = 2;
+constexpr int kTetrahedron = 4;
+
+std::string type_text(long long type) {
+  return "element type " + std::to_string(type) + " (" + element_type(type).name + ")";
+}
+
+// ---------------------------------------------------------------------------
+// The file in memory and a cursor over it
+
+// Shows a token in an error message: at most 40 characters, bytes outside
+// printable ASCII as \xNN.
+std::string quoted(std::string_view t) {
+  std::string out = "'";
+  const std::size_t n = std::min<std::size_t>(t.size(), 40);
+  for (std::size_t i = 0; i < n; ++i) {
+    const unsigned char c = static_cast<unsigned char>(t[i]);
+    if (c >= 32 && c < 127) {
+      out += char(c);
+    } else {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02X", c);
+      out += buf;
+    }
+  }
+  if (t.size() > n)
+    out += "...";
+  return out + "'";
+}
+
+bool is_space(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v';
+}
+
+class Source {
+public:
+  explicit Source(const std::string &path) : path_(path) {
+    std::FILE *file = std::fopen(path.c_str(), "rb");
+    if (!file)
+      throw InputError(path, std::string("cannot open: ") + std::strerror(errno));
+    char chunk[1 << 16];
+    std::size_t got;
+    while ((got = std::fread(chunk, 1, sizeof chunk, file)) > 0)
+      text_.append(chunk, got);
+    const bool failed = std::ferror(file);
+    const int err = errno;
+    std::fclose(file);
+    if (failed)
+      throw InputError(path, std::string("cannot read: ") + std::strerror(err));
+  }
+
+  bool binary = false; // decided by $MeshFormat
+  bool swap = false;   // binary data in the other byte order
+  int size_width = 8;  // bytes of a size_t field in 4.1 binary files
+
+  const std::string &path() const { return path_; }
+  std::size_t pos() const { return pos_; }
+  std::size_t size() const { return text_.size(); }
+  std::size_t remaining() const { return text_.size() - pos_; }
+  std::size_t at(std::string_view token) const { return std::size_t(token.data() - text_.data()); }
+
+  // Where the next item starts: past blanks in ASCII files (so that errors
+  // name its line), exactly here in binary ones.
+  std::size_t mark() {
+    if (!binary)
+      skip_space();
+    return pos_;
+  }
+
+  // "line N" (ASCII files) or "byte offset N" (binary files).
+  std::string where(std::size_t at) const {
+    at = std::min(at, text_.size());
+    if (binary)
+      return "byte offset " + std::to_string(at);
+    const auto newlines = std::count(text_.begin(), text_.begin() + std::ptrdiff_t(at), '\n');
+    return "line " + std::to_string(newlines + 1);
+  }
+
+  [[noreturn]] void fail(std::size_t at, const std::string &what) const {
+    throw InputError(path_, where(at) + ": " + what);
+  }
+
+  // How many of `n` items of at least `bytes_each` bytes the rest of the file
+  // can hold: the most a count read from the file may reserve. (A count too
+  // large is then reported where the data runs out.)
+  std::size_t affordable(std::uint64_t n, std::uint64_t bytes_each) const {
+    return std::size_t(
+        std::min<std::uint64_t>(n, remaining() / std::max<std::uint64_t>(bytes_each, 1)));
+  }
+
+  // --- text
+
+  void skip_space() {
+    while (pos_ < text_.size() && is_space(text_[pos_]))
+      ++pos_;
+  }
+  bool at_end() {
+    skip_space();
+    return pos_ >= text_.size();
+  }
+
+  // The next whitespace-delimited token; fails at the end of the file.
+  std::string_view token(const std::string &expected) {
+    skip_space();
+    if (pos_ >= text_.size())
+      fail(pos_, "file ends where " + expected + " was expected");
+    const std::size_t start = pos_;
+    while (pos_ < text_.size() && !is_space(text_[pos_]))
+      ++pos_;
+    last_ = std::string_view(text_).substr(start, pos_ - start);
+    return last_;
+  }
+  // The last token read, quoted for a message.
+  std::string last_token() const { return quoted(last_); }
+
+  std::uint64_t count(const std::string &what) {
+    const std::string_view t = token(what);
+    std::uint64_t v = 0;
+    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (ec != std::errc() || end != t.data() + t.size())
+      fail(at(t), "expected " + what + " (a non-negative integer), found " + quoted(t));
+    return v;
+  }
+
+  long long integer(const std::string &what) {
+    const std::string_view t = token(what);
+    long long v = 0;
+    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (ec != std::errc() || end != t.data() + t.size() || v < INT_MIN || v > INT_MAX)
+      fail(at(t), "expected " + what + " (an integer), found " + quoted(t));
+    return v;
+  }
+
+  double real(const std::string &what) {
+    const std::string_view t = token(what);
+    std::string_view s = t;
+    if (!s.empty() && s[0] == '+')
+      s.remove_prefix(1);
+    double v = 0;
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec != std::errc() || end != s.data() + s.size() || s.empty() || s[0] == '+')
+      fail(at(t), "expected " + what + " (a number), found " + quoted(t));
+    return v;
+  }
+
+  // The rest of the current line without its end-of-line characters; moves
+  // past the newline.
+  std::string_view line(const std::string &expected) {
+    if (pos_ >= text_.size())
+      fail(pos_, "file ends where " + expected + " was expected");
+    const std::size_t start = pos_;
+    while (pos_ < text_.size() && text_[pos_] != '\n')
+      ++pos_;
+    std::size_t end = pos_;
+    if (pos_ < text_.size())
+      ++pos_;
+    while (end > start && is_space(text_[end - 1]))
+      --end;
+    return std::string_view(text_).substr(start, end - start);
+  }
+
+  // Moves past the newline ending the current line, which must hold nothing
+  // else but blanks. Used where binary data starts on the next line (binary
+  // data may itself begin with bytes that look like whitespace).
+  void finish_line(const std::string &after) {
+    while (pos_ < text_.size() &&
+           (text_[pos_] == ' ' || text_[pos_] == '\t' || text_[pos_] == '\r'))
+      ++pos_;
+    if (pos_ >= text_.size())
+      fail(pos_, "file ends after " + after);
+    if (text_[pos_] != '\n') {
+      const std::size_t start = pos_;
+      std::size_t end = start;
+      while (end < text_.size() && !is_space(text_[end]))
+        ++end;
+      fail(pos_, "unexpected " + quoted(std::string_view(text_).substr(start, end - start)) +
+                     " after " + after);
+    }
+    ++pos_;
+  }
+
+  // Reads "$End<name>".
+  void expect_end(const std::string &name) {
+    const std::string marker = "$End" + name;
+    const std::string_view t = token(marker);
+    if (t != marker)
+      fail(at(t), "expected " + marker + ", found " + quoted(t));
+  }
+
+  // Moves past the "$End<name>" that closes an unknown section starting at
+  // `section_at`. The marker must start a line.
+  void skip_section(const std::string &name, std::size_t section_at) {
+    const std::string marker = "$End" + name;
+    std::size_t p = pos_;
+    while ((p = text_.find(marker, p)) != std::string::npos) {
+      const bool starts_line = p == pos_ || text_[p - 1] == '\n' || text_[p - 1] == '\r';
+      const std::size_t after = p + marker.size();
+      const bool ends_word = after == text_.size() || is_space(text_[after]);
+      if (starts_line && ends_word) {
+        pos_ = after;
+        return;
+      }
+      p = after;
+    }
+    fail(section_at, "section $" + name + " has no " + marker);
+  }
+
+  // --- binary
+
+  template <class T> T raw(const std::string &what) {
+    if (remaining() < sizeof(T))
+      fail(pos_, "file ends inside binary data (" + what + ")");
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, text_.data() + pos_, sizeof(T));
+    if (swap)
+      std::reverse(b, b + sizeof(T));
+    T v;
+    std::memcpy(&v, b, sizeof(T));
+    pos_ += sizeof(T);
+    return v;
+  }
+
+  // A 4.1 size_t field.
+  std::uint64_t raw_size(const std::string &what) {
+    return size_width == 8 ? raw<std::uint64_t>(what) : raw<std::uint32_t>(what);
+  }
+
+  // A 2.2 int field that must not be negative.
+  std::uint64_t raw_count(const std::string &what) {
+    const std::size_t p = pos_;
+    const std::int32_t v = raw<std::int32_t>(what);
+    if (v < 0)
+      fail(p, "expected " + what + " (a non-negative integer), found " + std::to_string(v));
+    return std::uint64_t(v);
+  }
+
+private:
+  std::string path_;
+  std::string text_;
+  std::size_t pos_ = 0;
+  std::string_view last_;
+};
+
+// ---------------------------------------------------------------------------
+// What the sections hold, gathered while reading
+
+struct Nodes {
+  bool read = false;
+  std::vector<std::uint64_t> tag; // sorted by tag once the section is read
+  std::vector<double> xyz;        // 3 per node
+  std::vector<std::size_t> at;    // where each node is in the file
+  bool dense = false;             // tags are tag[0], tag[0] + 1, ... (the usual case)
+
+  std::size_t size() const { return tag.size(); }
+  std::size_t find(std::uint64_t t) const {
+    if (dense)
+      return t >= tag.front() && t - tag.front() < tag.size() ? std::size_t(t - tag.front())
+                                                              : kNone;
+    const auto it = std::lower_bound(tag.begin(), tag.end(), t);
+    return it != tag.end() && *it == t ? std::size_t(it - tag.begin()) : kNone;
+  }
+};
+
+// The linear simplices of one dimension, in file order.
+struct Simplices {
+  std::vector<std::uint32_t> nodes; // dim+1 node indices (into Nodes) each
+  std::vector<long long> geom;      // elementary entity tag
+  std::vector<long long> phys;      // physical tag (2.2 files)
+  std::size_t size() const { return geom.size(); }
+};
+
+struct ElementRef {
+  std::uint64_t tag;
+  std::size_t at;
+  int dim;
+  std::uint32_t index; // into Simplices[dim] for kept-candidate types, else kNoIndex
+};
+
+// The first element of some kind, remembered to report it later.
+struct Sighting {
+  std::size_t at = kNone;
+  long long type = 0;
+  void note(std::size_t where, long long t) {
+    if (at == kNone) {
+      at = where;
+      type = t;
+    }
+  }
+};
+
+struct DataBlock {
+  bool on_nodes = true;
+  std::string name;
+  int components = 1;
+  long long step = 0;
+  std::size_t at = 0;
+  std::vector<std::uint64_t> tags;
+  std::vector<double> values; // `components` per tag
+};
+
+struct MshFile {
+  int version = 0; // 22 or 41
+  Nodes nodes;
+  bool elements_read = false;
+  std::size_t elements_at = 0;
+  Simplices simplices[4];
+  std::vector<ElementRef> elements;
+  int top_dim = -1;                              // highest dimension among simplices of any order
+  bool tags22[4] = {false, false, false, false}; // a 2.2 triangle/tet carried >= 2 tags
+  Sighting non_simplex[4];                       // quads, hexahedra, prisms, pyramids per dimension
+  Sighting higher_order[4];                      // curved simplices per dimension
+  std::size_t off_plane_at = kNone;              // first triangle with a node off z = 0
+  std::string off_plane_what;
+  bool have_entities = false;
+  std::map<std::pair<int, long long>, long long> first_physical; // (dim, entity) -> tag or 0
+  std::vector<DataBlock> data;
+};
+
+// ---------------------------------------------------------------------------
+// Sections
+
+void read_format(Source &src, MshFile &f) {
+  const std::size_t v_at = src.mark();
+  const double v = src.real("the MSH version");
+  if (v == 2.2)
+    f.version = 22;
+  else if (v == 4.1)
+    f.version = 41;
+  else
+    src.fail(v_at, "unsupported MSH version " + src.last_token() + " (supported: 2.2 and 4.1)");
+  const std::uint64_t type = src.count("the file type (0 ASCII, 1 binary)");
+  if (type > 1)
+    src.fail(src.pos(),
+             "file type " + std::to_string(type) + " is neither 0 (ASCII) nor 1 (binary)");
+  const std::size_t size_at = src.mark();
+  const std::uint64_t data_size = src.count("the data size");
+  if (type == 1) {
+    src.binary = true;
+    if (f.version == 22 && data_size != 8)
+      src.fail(size_at, "binary MSH 2.2 needs data size 8, found " + std::to_string(data_size));
+    if (f.version == 41 && data_size != 4 && data_size != 8)
+      src.fail(size_at,
+               "binary MSH 4.1 needs a size_t of 4 or 8 bytes, found " + std::to_string(data_size));
+    src.size_width = int(data_size);
+    src.finish_line("the data size");
+    const std::size_t one_at = src.pos();
+    const std::int32_t one = src.raw<std::int32_t>("the endianness check");
+    if (one == 0x01000000)
+      src.swap = true;
+    else if (one != 1)
+      src.fail(one_at,
+               "expected the binary integer 1 (endianness check), found " + std::to_string(one));
+  }
+  src.expect_end("MeshFormat");
+}
+
+// A size_t field (4.1) in an ASCII or binary file.
+std::uint64_t size41(Source &src, const std::string &what) {
+  return src.binary ? src.raw_size(what) : src.count(what);
+}
+
+// An int field in an ASCII or binary file.
+long long int41(Source &src, const std::string &what) {
+  return src.binary ? src.raw<std::int32_t>(what) : src.integer(what);
+}
+
+double real41(Source &src, const std::string &what) {
+  return src.binary ? src.raw<double>(what) : src.real(what);
+}
+
+// Reads one node of a 2.2 file. A $ParametricNodes node continues with
+// the dimension and tag of its entity and its 0, 1 or 2 parametric
+// coordinates (u for curves, u v for surfaces).
+void read_node22(Source &src, Nodes &n, bool parametric) {
+  const std::size_t at = src.mark();
+  std::uint64_t tag;
+  double xyz[3];
+  if (src.binary) {
+    tag = src.raw_count("node tag");
+    for (double &x : xyz)
+      x = src.raw<double>("node coordinate");
+  } else {
+    tag = src.count("node tag");
+    for (double &x : xyz)
+      x = src.real("node coordinate");
+  }
+  if (parametric) {
+    const std::size_t dim_at = src.mark();
+    const long long dim = int41(src, "node entity dimension");
+    if (dim < 0 || dim > 3)
+      src.fail(dim_at, "node entity dimension " + std::to_string(dim) + " is not 0..3");
+    int41(src, "node entity tag");
+    for (long long k = 0; k < (dim == 1 || dim == 2 ? dim : 0); ++k)
+      real41(src, "parametric coordinate");
+  }
+  n.tag.push_back(tag);
+  n.at.push_back(at);
+  n.xyz.insert(n.xyz.end(), xyz, xyz + 3);
+}
+
+// Sorts the nodes by tag and rejects duplicates and non-finite coordinates.
+void finish_nodes(Source &src, Nodes &n) {
+  for (std::size_t i = 0; i < n.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(n.xyz[3 * i + k]))
+        src.fail(n.at[i], "node " + std::to_string(n.tag[i]) + " has a non-finite coordinate");
+  if (n.size() >= kNoIndex)
+    src.fail(n.at.back(), "too many nodes (more than 2^32 - 1)");
+  if (!std::is_sorted(n.tag.begin(), n.tag.end())) {
+    std::vector<std::size_t> order(n.size());
+    std::iota(order.begin(), order.end(), std::size_t(0));
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return n.tag[a] < n.tag[b]; });
+    Nodes s;
+    s.tag.reserve(n.size());
+    s.at.reserve(n.size());
+    s.xyz.reserve(n.xyz.size());
+    for (std::size_t i : order) {
+      s.tag.push_back(n.tag[i]);
+      s.at.push_back(n.at[i]);
+      s.xyz.insert(s.xyz.end(), n.xyz.begin() + std::ptrdiff_t(3 * i),
+                   n.xyz.begin() + std::ptrdiff_t(3 * i + 3));
+    }
+    n.tag = std::move(s.tag);
+    n.at = std::move(s.at);
+    n.xyz = std::move(s.xyz);
+  }
+  for (std::size_t i = 1; i < n.size(); ++i)
+    if (n.tag[i] == n.tag[i - 1]) {
+      const std::size_t later = std::max(n.at[i], n.at[i - 1]);
+      const std::size_t first = std::min(n.at[i], n.at[i - 1]);
+      src.fail(later, "duplicate node tag " + std::to_string(n.tag[i]) + " (first defined at " +
+                          src.where(first) + ")");
+    }
+  n.dense = !n.tag.empty() && n.tag.back() - n.tag.front() == n.tag.size() - 1;
+  n.read = true;
+}
+
+void read_nodes22(Source &src, MshFile &f, bool parametric) {
+  const std::uint64_t count = src.count("the number of nodes");
+  if (src.binary)
+    src.finish_line("the number of nodes");
+  const std::size_t fits = src.affordable(count, src.binary ? 4 + 3 * 8 : 8);
+  f.nodes.tag.reserve(fits);
+  f.nodes.at.reserve(fits);
+  f.nodes.xyz.reserve(3 * fits);
+  for (std::uint64_t i = 0; i < count; ++i)
+    read_node22(src, f.nodes, parametric);
+  src.expect_end(parametric ? "ParametricNodes" : "Nodes");
+  finish_nodes(src, f.nodes);
+}
+
+void read_nodes41(Source &src, MshFile &f) {
+  const std::size_t sw = std::size_t(src.size_width);
+  const std::size_t header_at = src.mark();
+  const std::uint64_t blocks = size41(src, "the number of node blocks");
+  const std::uint64_t total = size41(src, "the number of nodes");
+  size41(src, "the minimum node tag");
+  size41(src, "the maximum node tag");
+  const std::size_t fits = src.affordable(total, src.binary ? sw + 24 : 8);
+  Nodes &n = f.nodes;
+  n.tag.reserve(fits);
+  n.at.reserve(fits);
+  n.xyz.reserve(3 * fits);
+  for (std::uint64_t b = 0; b < blocks; ++b) {
+    const std::size_t block_at = src.mark();
+    const long long dim = int41(src, "the entity dimension of a node block");
+    int41(src, "the entity tag of a node block");
+    const long long parametric = int41(src, "the parametric flag of a node block");
+    const std::uint64_t count = size41(src, "the number of nodes in a block");
+    if (dim < 0 || dim > 3)
+      src.fail(block_at, "node block entity dimension " + std::to_string(dim) + " is not 0..3");
+    if (parametric != 0 && parametric != 1)
+      src.fail(block_at,
+               "node block parametric flag " + std::to_string(parametric) + " is not 0 or 1");
+    if (count > total - n.size())
+      src.fail(block_at,
+               "node blocks hold more nodes than the " + std::to_string(total) + " announced");
+    const int extra = parametric ? int(dim) : 0; // u, v, w of parametric nodes
+    for (std::uint64_t i = 0; i < count; ++i) {
+      n.at.push_back(src.mark());
+      n.tag.push_back(size41(src, "node tag"));
+    }
+    for (std::uint64_t i = 0; i < count; ++i) {
+      for (int k = 0; k < 3; ++k)
+        n.xyz.push_back(real41(src, "node coordinate"));
+      for (int k = 0; k < extra; ++k)
+        real41(src, "parametric node coordinate");
+    }
+  }
+  if (n.size() != total)
+    src.fail(header_at, "node header announces " + std::to_string(total) +
+                            " nodes, the blocks hold " + std::to_string(n.size()));
+  src.expect_end("Nodes");
+  finish_nodes(src, n);
+}
+
+// Records one element: its tag (for duplicate checks and element data), its
+// nodes if it may become a cell, and what kind of element it is.
+void add_element(Source &src, MshFile &f, std::uint64_t tag, long long type, const ElementType &et,
+                 long long geom, long long phys, const std::uint64_t *node_tags, std::size_t at) {
+  std::uint32_t idx[4] = {0, 0, 0, 0};
+  for (int k = 0; k < et.nodes; ++k) {
+    const std::size_t p = f.nodes.find(node_tags[k]);
+    if (p == kNone)
+      src.fail(at, "element " + std::to_string(tag) + " refers to node " +
+                       std::to_string(node_tags[k]) + ", which is not in $Nodes");
+    if (k < 4)
+      idx[k] = std::uint32_t(p);
+  }
+  ElementRef ref{tag, at, et.dim, kNoIndex};
+  if (et.simplex && et.dim >= 2)
+    f.top_dim = std::max(f.top_dim, et.dim);
+  if (type == kTriangle || type == kTetrahedron) {
+    Simplices &s = f.simplices[et.dim];
+    if (s.size() >= kNoIndex - 1)
+      src.fail(at, "too many cells (more than 2^32 - 2)");
+    ref.index = std::uint32_t(s.size());
+    s.nodes.insert(s.nodes.end(), idx, idx + et.nodes);
+    s.geom.push_back(geom);
+    s.phys.push_back(phys);
+    if (type == kTriangle && f.off_plane_at == kNone)
+      for (int k = 0; k < 3; ++k) {
+        const double z = f.nodes.xyz[3 * std::size_t(idx[k]) + 2];
+        if (z != 0) {
+          f.off_plane_at = at;
+          char buf[64];
+          std::snprintf(buf, sizeof buf, "%.17g", z);
+          f.off_plane_what = "triangle " + std::to_string(tag) + " has node " +
+                             std::to_string(node_tags[k]) + " at z = " + buf;
+          break;
+        }
+      }
+  } else if (et.dim >= 2 && !et.simplex) {
+    f.non_simplex[et.dim].note(at, type);
+  } else if (et.dim >= 2 && !et.linear) {
+    f.higher_order[et.dim].note(at, type);
+  }
+  f.elements.push_back(ref);
+}
+
+// The element type at `at`, which must be one this reader knows.
+ElementType known_type(Source &src, long long type, std::size_t at) {
+  const ElementType et = element_type(type);
+  if (et.dim < 0)
+    src.fail(at, "unknown or unsupported element type " + std::to_string(type));
+  return et;
+}
+
+void require_nodes_before_elements(Source &src, const MshFile &f, std::size_t at) {
+  if (!f.nodes.read)
+    src.fail(at, "$Elements comes before $Nodes");
+  if (f.elements_read)
+    src.fail(at, "second $Elements section");
+}
+
+void read_elements22(Source &src, MshFile &f) {
+  const std::uint64_t total = src.count("the number of elements");
+  f.elements.reserve(src.affordable(total, 8));
+  std::vector<std::uint64_t> node_tags;
+  auto note_tags = [&](const ElementType &et, std::uint64_t ntags, long long type) {
+    if (ntags >= 2 && (type == kTriangle || type == kTetrahedron))
+      f.tags22[et.dim] = true;
+  };
+  if (src.binary) {
+    src.finish_line("the number of elements");
+    std::uint64_t done = 0;
+    while (done < total) {
+      const std::size_t block_at = src.pos();
+      const long long type = src.raw<std::int32_t>("element type");
+      const std::uint64_t count = src.raw_count("the number of elements in a block");
+      const std::uint64_t ntags = src.raw_count("the number of element tags");
+      const ElementType et = known_type(src, type, block_at);
+      if (count == 0 || count > total - done)
+        src.fail(block_at, "element block of " + std::to_string(count) +
+                               " elements does not fit the " + std::to_string(total - done) +
+                               " elements left of the " + std::to_string(total) + " announced");
+      node_tags.resize(std::size_t(et.nodes));
+      for (std::uint64_t i = 0; i < count; ++i) {
+        const std::size_t at = src.pos();
+        const std::uint64_t tag = src.raw_count("element tag");
+        long long tags[2] = {0, 0};
+        for (std::uint64_t j = 0; j < ntags; ++j) {
+          const long long v = src.raw<std::int32_t>("element tag");
+          if (j < 2)
+            tags[j] = v;
+        }
+        for (std::uint64_t &n : node_tags)
+          n = src.raw_count("node tag");
+        note_tags(et, ntags, type);
+        add_element(src, f, tag, type, et, tags[1], tags[0], node_tags.data(), at);
+      }
+      done += count;
+    }
+  } else {
+    for (std::uint64_t i = 0; i < total; ++i) {
+      const std::size_t at = src.mark();
+      const std::uint64_t tag = src.count("element tag");
+      const std::size_t type_at = src.mark();
+      const long long type = src.integer("element type");
+      const ElementType et = known_type(src, type, type_at);
+      const std::uint64_t ntags = src.count("the number of element tags");
+      long long tags[2] = {0, 0};
+      for (std::uint64_t j = 0; j < ntags; ++j) {
+        const long long v = src.integer("element tag");
+        if (j < 2)
+          tags[j] = v;
+      }
+      node_tags.resize(std::size_t(et.nodes));
+      for (std::uint64_t &n : node_tags)
+        n = src.count("node tag");
+      note_tags(et, ntags, type);
+      add_element(src, f, tag, type, et, tags[1], tags[0], node_tags.data(), at);
+    }
+  }
+  src.expect_end("Elements");
+}
+
+void read_elements41(Source &src, MshFile &f) {
+  const std::size_t sw = std::size_t(src.size_width);
+  const std::size_t header_at = src.mark();
+  const std::uint64_t blocks = size41(src, "the number of element blocks");
+  const std::uint64_t total = size41(src, "the number of elements");
+  size41(src, "the minimum element tag");
+  size41(src, "the maximum element tag");
+  f.elements.reserve(src.affordable(total, src.binary ? 2 * sw : 4));
+  std::vector<std::uint64_t> node_tags;
+  std::uint64_t done = 0;
+  for (std::uint64_t b = 0; b < blocks; ++b) {
+    const std::size_t block_at = src.mark();
+    const long long dim = int41(src, "the entity dimension of an element block");
+    const long long entity = int41(src, "the entity tag of an element block");
+    const long long type = int41(src, "the element type of an element block");
+    const std::uint64_t count = size41(src, "the number of elements in a block");
+    const ElementType et = known_type(src, type, block_at);
+    if (dim != et.dim)
+      src.fail(block_at,
+               "element block of dimension " + std::to_string(dim) + " holds " + type_text(type));
+    if (count > total - done)
+      src.fail(block_at, "element blocks hold more elements than the " + std::to_string(total) +
+                             " announced");
+    node_tags.resize(std::size_t(et.nodes));
+    for (std::uint64_t i = 0; i < count; ++i) {
+      const std::size_t at = src.mark();
+      const std::uint64_t tag = size41(src, "element tag");
+      for (std::uint64_t &n : node_tags)
+        n = size41(src, "node tag");
+      add_element(src, f, tag, type, et, entity, 0, node_tags.data(), at);
+    }
+    done += count;
+  }
+  if (done != total)
+    src.fail(header_at, "element header announces " + std::to_string(total) +
+                            " elements, the blocks hold " + std::to_string(done));
+  src.expect_end("Elements");
+}
+
+// 4.1 $Entities: remembers the first physical tag of every entity.
+void read_entities41(Source &src, MshFile &f) {
+  std::uint64_t counts[4];
+  for (std::uint64_t &c : counts)
+    c = size41(src, "the number of entities");
+  for (int d = 0; d < 4; ++d) {
+    for (std::uint64_t i = 0; i < counts[d]; ++i) {
+      const std::size_t at = src.mark();
+      const long long tag = int41(src, "entity tag");
+      for (int k = 0; k < (d == 0 ? 3 : 6); ++k)
+        real41(src, "entity bounding box coordinate");
+      const std::uint64_t nphys = size41(src, "the number of physical tags");
+      long long first = 0;
+      for (std::uint64_t j = 0; j < nphys; ++j) {
+        const long long p = int41(src, "physical tag");
+        if (j == 0)
+          first = p;
+      }
+      if (d > 0) {
+        const std::uint64_t nb = size41(src, "the number of bounding entities");
+        for (std::uint64_t j = 0; j < nb; ++j)
+          int41(src, "bounding entity tag");
+      }
+      if (!f.first_physical.emplace(std::make_pair(d, tag), first).second)
+        src.fail(at, "duplicate entity (dimension " + std::to_string(d) + ", tag " +
+                         std::to_string(tag) + ")");
+    }
+  }
+  src.expect_end("Entities");
+  f.have_entities = true;
+}
+
+// Adds a data section to the ones read: a later section of the same name
+// replaces an earlier one (a later time step) unless it continues the same
+// time step (a partitioned file), in which case the entries are appended.
+void keep_data(Source &src, MshFile &f, DataBlock &&b) {
+  for (DataBlock &d : f.data) {
+    if (d.on_nodes != b.on_nodes || d.name != b.name)
+      continue;
+    if (d.step != b.step) {
+      d = std::move(b);
+    } else {
+      if (d.components != b.components)
+        src.fail(b.at, "data " + quoted(b.name) + " changes from " + std::to_string(d.components) +
+                           " to " + std::to_string(b.components) +
+                           " components within one time step");
+      d.tags.insert(d.tags.end(), b.tags.begin(), b.tags.end());
+      d.values.insert(d.values.end(), b.values.begin(), b.values.end());
+    }
+    return;
+  }
+  f.data.push_back(std::move(b));
+}
+
+// $NodeData / $ElementData (same layout in 2.2 and 4.1).
+void read_data(Source &src, MshFile &f, bool on_nodes, std::size_t section_at) {
+  const std::string section = on_nodes ? "NodeData" : "ElementData";
+  DataBlock b;
+  b.on_nodes = on_nodes;
+  b.at = section_at;
+  const std::size_t nstr_at = src.mark();
+  const std::uint64_t nstr = src.count("the number of string tags");
+  if (nstr == 0)
+    src.fail(nstr_at, "$" + section + " without a name (no string tags)");
+  src.finish_line("the number of string tags");
+  for (std::uint64_t i = 0; i < nstr; ++i) {
+    std::string_view s = src.line("a string tag");
+    while (!s.empty() && is_space(s.front()))
+      s.remove_prefix(1);
+    if (s.size() >= 2 && s.front() == '"' && s.back() == '"')
+      s = s.substr(1, s.size() - 2);
+    if (i == 0)
+      b.name = std::string(s);
+  }
+  const std::uint64_t nreal = src.count("the number of real tags");
+  for (std::uint64_t i = 0; i < nreal; ++i)
+    src.real("real tag");
+  const std::size_t nint_at = src.mark();
+  const std::uint64_t nint = src.count("the number of integer tags");
+  if (nint < 3)
+    src.fail(nint_at, "expected at least 3 integer tags (time step, components, entries), found " +
+                          std::to_string(nint));
+  b.step = src.integer("the time step");
+  const std::size_t comp_at = src.mark();
+  const std::uint64_t components = src.count("the number of components");
+  if (components < 1 || components > 4096)
+    src.fail(comp_at, "number of components " + std::to_string(components) + " is not in 1..4096");
+  b.components = int(components);
+  const std::uint64_t n = src.count("the number of entries");
+  for (std::uint64_t i = 3; i < nint; ++i)
+    src.integer("integer tag");
+  if (src.binary)
+    src.finish_line("the integer tags");
+  const std::size_t fits =
+      src.affordable(n, src.binary ? 4 + 8 * components : 2 * (1 + components));
+  b.tags.reserve(fits);
+  b.values.reserve(fits * components);
+  for (std::uint64_t i = 0; i < n; ++i) {
+    b.tags.push_back(src.binary ? src.raw_count("data entity tag") : src.count("data entity tag"));
+    for (std::uint64_t k = 0; k < components; ++k)
+      b.values.push_back(src.binary ? src.raw<double>("data value") : src.real("data value"));
+  }
+  src.expect_end(section);
+  keep_data(src, f, std::move(b));
+}
+
+MshFile parse(Source &src) {
+  MshFile f;
+  const std::string_view first = src.token("$MeshFormat");
+  if (first == "$NOD" || first == "$NOE")
+    src.fail(src.at(first), "MSH version 1 files are not supported (supported: 2.2 and 4.1)");
+  if (first != "$MeshFormat")
+    src.fail(src.at(first),
+             "expected $MeshFormat at the start of a .msh file, found " + quoted(first));
+  read_format(src, f);
+  while (!src.at_end()) {
+    const std::string_view t = src.token("a section header");
+    const std::size_t at = src.at(t);
+    if (t.size() < 2 || t[0] != '$')
+      src.fail(at, "expected a section header such as $Nodes, found " + quoted(t));
+    const std::string name(t.substr(1));
+    if (name.rfind("End", 0) == 0)
+      src.fail(at, "unexpected " + quoted(t) + " outside its section");
+    src.finish_line("$" + name);
+    if (name == "Nodes" || (name == "ParametricNodes" && f.version == 22)) {
+      if (f.nodes.read)
+        src.fail(at, "second $Nodes section");
+      f.version == 22 ? read_nodes22(src, f, name == "ParametricNodes") : read_nodes41(src, f);
+    } else if (name == "Elements") {
+      require_nodes_before_elements(src, f, at);
+      f.elements_at = at;
+      f.version == 22 ? read_elements22(src, f) : read_elements41(src, f);
+      f.elements_read = true;
+    } else if (name == "Entities" && f.version == 41) {
+      if (f.have_entities)
+        src.fail(at, "second $Entities section");
+      read_entities41(src, f);
+    } else if (name == "NodeData" || name == "ElementData") {
+      read_data(src, f, name == "NodeData", at);
+    } else {
+      src.skip_section(name, at); // $PhysicalNames, $Periodic, $Comments, ...
+    }
+  }
+  if (!f.nodes.read)
+    src.fail(src.size(), "no $Nodes section");
+  if (!f.elements_read)
+    src.fail(src.size(), "no $Elements section");
+  return f;
+}
+
+// ---------------------------------------------------------------------------
+// From the sections to the Mesh
+
+void reject_duplicate_elements(Source &src, MshFile &f) {
+  const auto by_tag = [](const ElementRef &a, const ElementRef &b) {
+    return a.tag != b.tag ? a.tag < b.tag : a.at < b.at;
+  };
+  if (!std::is_sorted(f.elements.begin(), f.elements.end(), by_tag))
+    std::sort(f.elements.begin(), f.elements.end(), by_tag);
+  for (std::size_t i = 1; i < f.elements.size(); ++i)
+    if (f.elements[i].tag == f.elements[i - 1].tag)
+      src.fail(f.elements[i].at, "duplicate element tag " + std::to_string(f.elements[i].tag) +
+                                     " (first defined at " + src.where(f.elements[i - 1].at) + ")");
+}
+
+// The cell dimension, after rejecting what this reader does not handle.
+int cell_dimension(Source &src, const MshFile &f) {
+  const int dim = f.top_dim;
+  if (dim < 2)
+    src.fail(f.elements_at, "no triangles or tetrahedra in $Elements");
+  const char *cells = dim == 3 ? "tetrahedra" : "triangles";
+  if (f.higher_order[dim].at != kNone)
+    src.fail(f.higher_order[dim].at,
+             type_text(f.higher_order[dim].type) +
+                 ": higher-order simplices are not supported (only linear " + cells + ")");
+  if (f.non_simplex[dim].at != kNone)
+    src.fail(f.non_simplex[dim].at,
+             "mixed non-simplex cells: " + type_text(f.non_simplex[dim].type) + " among the " +
+                 cells + " is not supported");
+  if (dim == 2 && f.non_simplex[3].at != kNone) // volume cells beside a triangle mesh
+    src.fail(f.non_simplex[3].at, "mixed non-simplex cells: " + type_text(f.non_simplex[3].type) +
+                                      " in a triangle mesh is not supported");
+  return dim; // triangles off z = 0: see settle_plane in io.cpp
+}
+
+// "gmsh:physical" and "gmsh:geometrical", when the file provides them.
+void add_gmsh_tags(const MshFile &f, int dim, Mesh &m) {
+  const Simplices &s = f.simplices[dim];
+  DataArray phys{"gmsh:physical", 1, {}}, geom{"gmsh:geometrical", 1, {}};
+  bool any_phys = false;
+  if (f.version == 22) {
+    if (!f.tags22[dim])
+      return;
+    phys.values.assign(s.phys.begin(), s.phys.end());
+    any_phys = true;
+  } else {
+    if (!f.have_entities)
+      return;
+    phys.values.reserve(s.size());
+    for (std::size_t c = 0; c < s.size(); ++c) {
+      const auto it = f.first_physical.find({dim, s.geom[c]});
+      const long long p = it == f.first_physical.end() ? 0 : it->second;
+      any_phys |= p != 0;
+      phys.values.push_back(double(p));
+    }
+  }
+  geom.values.assign(s.geom.begin(), s.geom.end());
+  if (any_phys)
+    m.cell_data.push_back(std::move(phys));
+  m.cell_data.push_back(std::move(geom));
+}
+
+DataArray node_array(Source &src, const MshFile &f, const DataBlock &b,
+                     const std::vector<VertexId> &vertex_of, std::size_t nv) {
+  const std::size_t nc = std::size_t(b.components);
+  DataArray a{b.name, b.components, std::vector<double>(nv * nc, 0.0)};
+  std::vector<char> covered(nv, 0);
+  for (std::size_t i = 0; i < b.tags.size(); ++i) {
+    const std::size_t p = f.nodes.find(b.tags[i]);
+    if (p == kNone)
+      src.fail(b.at, "node data " + quoted(b.name) + " refers to node " +
+                         std::to_string(b.tags[i]) + ", which is not in $Nodes");
+    const VertexId v = vertex_of[p];
+    if (v == kNoVertex)
+      continue;
+    std::copy_n(b.values.begin() + std::ptrdiff_t(i * nc), nc,
+                a.values.begin() + std::ptrdiff_t(v * nc));
+    covered[v] = 1;
+  }
+  for (std::size_t p = 0; p < vertex_of.size(); ++p)
+    if (vertex_of[p] != kNoVertex && !covered[vertex_of[p]])
+      src.fail(b.at, "node data " + quoted(b.name) + " has no value for node " +
+                         std::to_string(f.nodes.tag[p]));
+  return a;
+}
+
+// Needs f.elements sorted by tag.
+DataArray cell_array(Source &src, const MshFile &f, const DataBlock &b, int dim) {
+  const std::size_t nc = std::size_t(b.components);
+  const std::size_t ncells = f.simplices[dim].size();
+  DataArray a{b.name, b.components, std::vector<double>(ncells * nc, 0.0)};
+  std::vector<char> covered(ncells, 0);
+  for (std::size_t i = 0; i < b.tags.size(); ++i) {
+    const auto it =
+        std::lower_bound(f.elements.begin(), f.elements.end(), b.tags[i],
+                         [](const ElementRef &e, std::uint64_t t) { return e.tag < t; });
+    if (it == f.elements.end() || it->tag != b.tags[i])
+      src.fail(b.at, "element data " + quoted(b.name) + " refers to element " +
+                         std::to_string(b.tags[i]) + ", which is not in $Elements");
+    if (it->dim != dim || it->index == kNoIndex)
+      continue; // a dropped lower-dimensional element
+    std::copy_n(b.values.begin() + std::ptrdiff_t(i * nc), nc,
+                a.values.begin() + std::ptrdiff_t(it->index * nc));
+    covered[it->index] = 1;
+  }
+  for (const ElementRef &e : f.elements)
+    if (e.dim == dim && e.index != kNoIndex && !covered[e.index])
+      src.fail(b.at, "element data " + quoted(b.name) + " has no value for element " +
+                         std::to_string(e.tag));
+  return a;
+}
+
+Mesh assemble(Source &src, MshFile &f) {
+  reject_duplicate_elements(src, f);
+  const int dim = cell_dimension(src, f);
+  const Simplices &s = f.simplices[dim];
+  Mesh m;
+  m.dim = dim;
+  // Vertices: the nodes the cells use, in increasing tag order.
+  std::vector<VertexId> vertex_of(f.nodes.size(), kNoVertex);
+  for (std::uint32_t p : s.nodes)
+    vertex_of[p] = 0;
+  VertexId nv = 0;
+  for (std::size_t p = 0; p < vertex_of.size(); ++p) {
+    if (vertex_of[p] == kNoVertex)
+      continue;
+    vertex_of[p] = nv++;
+    m.coords.insert(m.coords.end(), f.nodes.xyz.begin() + std::ptrdiff_t(3 * p),
+                    f.nodes.xyz.begin() + std::ptrdiff_t(3 * p + std::size_t(dim)));
+  }
+  if (dim == 2 && f.off_plane_at != kNone) {
+    DataArray z{kPlaneZArray, 1, {}};
+    z.values.reserve(nv);
+    for (std::size_t p = 0; p < vertex_of.size(); ++p)
+      if (vertex_of[p] != kNoVertex) z.values.push_back(f.nodes.xyz[3 * p + 2]);
+    m.point_data.push_back(std::move(z));
+  }
+  m.cells.reserve(s.nodes.size());
+  for (std::uint32_t p : s.nodes)
+    m.cells.push_back(vertex_of[p]);
+  add_gmsh_tags(f, dim, m);
+  for (const DataBlock &b : f.data) {
+    if (b.on_nodes)
+      m.point_data.push_back(node_array(src, f, b, vertex_of, nv));
+    else
+      m.cell_data.push_back(cell_array(src, f, b, dim));
+  }
+  // Cells in element tag order (f.elements is sorted by tag): a file whose
+  // blocks group the elements by entity, as Gmsh and our writer make them,
+  // gives back the cell order the tags say.
+  std::vector<std::uint32_t> by_tag;
+  by_tag.reserve(s.size());
+  for (const ElementRef &e : f.elements)
+    if (e.dim == dim && e.index != kNoIndex) by_tag.push_back(e.index);
+  bool identity = true;
+  for (std::size_t i = 0; i < by_tag.size() && identity; ++i) identity = by_tag[i] == i;
+  if (!identity && by_tag.size() == s.size()) {
+    const std::size_t nvc = std::size_t(dim + 1);
+    std::vector<VertexId> cells(m.cells.size());
+    for (std::size_t i = 0; i < by_tag.size(); ++i)
+      std::copy_n(m.cells.begin() + std::ptrdiff_t(by_tag[i] * nvc), nvc,
+                  cells.begin() + std::ptrdiff_t(i * nvc));
+    m.cells = std::move(cells);
+    for (DataArray &a : m.cell_data) {
+      const std::size_t k = std::size_t(a.components);
+      std::vector<double> values(a.values.size());
+      for (std::size_t i = 0; i < by_tag.size(); ++i)
+        std::copy_n(a.values.begin() + std::ptrdiff_t(by_tag[i] * k), k,
+                    values.begin() + std::ptrdiff_t(i * k));
+      a.values = std::move(values);
+    }
+  }
+  return m;
+}
+
+// ---------------------------------------------------------------------------
+// Writing (MSH 4.1 binary)
+
+// A buffered binary output file; errors become InputError naming the file.
+class Output {
+public:
+  explicit Output(const std::string &path) : path_(path), file_(std::fopen(path.c_str(), "wb")) {
+    if (!file_)
+      throw InputError(path, "cannot write: " + write_failure(errno));
+  }
+  ~Output() {
+    if (file_)
+      std::fclose(file_);
+  }
+  Output(const Output &) = delete;
+  Output &operator=(const Output &) = delete;
+
+  void text(std::string_view s) {
+    buffer_.append(s);
+    flush_if_full();
+  }
+  template <class T> void raw(T v) {
+    char b[sizeof(T)];
+    std::memcpy(b, &v, sizeof(T));
+    buffer_.append(b, sizeof(T));
+    flush_if_full();
+  }
+  void size(std::uint64_t v) { raw<std::uint64_t>(v); }
+  void int32(long long v) { raw<std::int32_t>(std::int32_t(v)); }
+
+  void close() {
+    flush();
+    const int rc = std::fclose(file_);
+    if (rc != 0 && !error_)
+      error_ = errno ? errno : EIO;
+    file_ = nullptr;
+    if (error_)
+      throw InputError(path_, "cannot write: " + write_failure(error_));
+  }
+
+private:
+  void flush() {
+    if (!buffer_.empty() &&
+        std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size() && !error_)
+      error_ = errno ? errno : EIO;
+    buffer_.clear();
+  }
+  void flush_if_full() {
+    if (buffer_.size() >= (std::size_t(1) << 20))
+      flush();
+  }
+
+  std::string path_;
+  std::FILE *file_;
+  std::string buffer_;
+  int error_ = 0;
+};
+
+// The arrays of `mesh` must have the sizes the Mesh contract promises.
+void check_writable(const std::string &path, const Mesh &mesh) {
+  if (mesh.dim == 4)
+    throw InputError(path, "a .msh file cannot hold a 4D mesh; write .vtu");
+  if (mesh.dim != 2 && mesh.dim != 3)
+    throw InputError(path,
+                     "cannot write a mesh of dimension " + std::to_string(mesh.dim) + " to .msh");
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  if (mesh.coords.size() != nv * std::size_t(mesh.dim) ||
+      mesh.cells.size() != nc * std::size_t(mesh.cell_size()))
+    throw InputError(path, "mesh arrays have inconsistent sizes");
+  if (nv > std::size_t(INT_MAX) || nc > std::size_t(INT_MAX))
+    throw InputError(path, "too many vertices or cells for a .msh file (at most 2^31 - 1)");
+  for (VertexId v : mesh.cells)
+    if (v >= nv)
+      throw InputError(path, "a cell refers to vertex " + std::to_string(v) + " of " +
+                                 std::to_string(nv));
+  auto check = [&](const DataArray &a, std::size_t n, const char *kind) {
+    if (a.components < 1 || a.values.size() != n * std::size_t(a.components))
+      throw InputError(path, std::string(kind) + " array " + quoted(a.name) + " has " +
+                                 std::to_string(a.values.size()) + " values for " +
+                                 std::to_string(n) + " entities");
+    if (a.name.find_first_of("\r\n") != std::string::npos)
+      throw InputError(path, std::string(kind) + " array name " + quoted(a.name) +
+                                 " contains a line break");
+  };
+  for (const DataArray &a : mesh.point_data)
+    check(a, nv, "point");
+  for (const DataArray &a : mesh.cell_data)
+    check(a, nc, "cell");
+}
+
+// A scalar cell array that becomes Gmsh entity information, or null.
+const DataArray *entity_array(const Mesh &mesh, const std::string &name) {
+  for (const DataArray &a : mesh.cell_data)
+    if (a.name == name && a.components == 1)
+      return &a;
+  return nullptr;
+}
+
+long long tag_value(const std::string &path, const DataArray *a, std::size_t c) {
+  if (!a)
+    return 0;
+  const double v = a->values[c];
+  if (!(v == std::floor(v)) || v < INT_MIN || v > INT_MAX)
+    throw InputError(path, "cell array " + quoted(a->name) + " holds " + std::to_string(v) +
+                               " at cell " + std::to_string(c) + ", which is not an integer tag");
+  return (long long)v;
+}
+
+struct Entity {
+  long long tag = 0;
+  long long physical = 0; // 0: none
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL};
+  double hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+};
+
+struct Block {
+  std::size_t entity;
+  std::size_t first, count; // positions in EntityPlan::order
+};
+
+struct EntityPlan {
+  std::vector<Entity> entities;
+  std::vector<Block> blocks;
+  // The cells in file order: grouped by entity, entities in order of first
+  // appearance, cells of one entity in mesh order. A cell's element tag is
+  // its index in the mesh plus one (readers that go by tags, Gmsh and ours,
+  // get the mesh's order back); $ElementData lists the cells in file order
+  // with those tags (meshio pairs data with elements by position).
+  std::vector<std::size_t> order;
+};
+
+// One entity per distinct (geometrical, physical) pair, tagged with the
+// geometrical tag unless another pair already took it; one element block per
+// entity, as Gmsh itself writes them.
+EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const DataArray *geom,
+                         const DataArray *phys) {
+  EntityPlan plan;
+  const std::size_t nc = mesh.num_cells();
+  long long next_tag = 1;
+  if (geom)
+    for (std::size_t c = 0; c < nc; ++c)
+      next_tag = std::max(next_tag, tag_value(path, geom, c) + 1);
+  std::map<std::pair<long long, long long>, std::size_t> entity_of;
+  std::set<long long> taken;
+  std::vector<std::size_t> entity_of_cell(nc);
+  for (std::size_t c = 0; c < nc; ++c) {
+    const long long g = tag_value(path, geom, c), p = tag_value(path, phys, c);
+    auto [it, added] = entity_of.emplace(std::make_pair(g, p), plan.entities.size());
+    if (added) {
+      Entity e;
+      e.tag = geom && !taken.count(g) ? g : next_tag++;
+      if (e.tag > INT_MAX)
+        throw InputError(path, "too many distinct gmsh:geometrical / gmsh:physical pairs");
+      e.physical = p;
+      taken.insert(e.tag);
+      plan.entities.push_back(e);
+    }
+    Entity &e = plan.entities[it->second];
+    for (int k = 0; k <= mesh.dim; ++k) {
+      const double *x = mesh.point(mesh.cell(CellId(c))[k]);
+      for (int i = 0; i < 3; ++i) {
+        const double xi = i < mesh.dim ? x[i] : 0.0;
+        e.lo[i] = std::min(e.lo[i], xi);
+        e.hi[i] = std::max(e.hi[i], xi);
+      }
+    }
+    entity_of_cell[c] = it->second;
+  }
+  // Counting sort of the cells by entity.
+  std::vector<std::size_t> count(plan.entities.size(), 0);
+  for (std::size_t c = 0; c < nc; ++c) ++count[entity_of_cell[c]];
+  std::vector<std::size_t> next;
+  for (std::size_t e = 0, first = 0; e < plan.entities.size(); first += count[e], ++e) {
+    plan.blocks.push_back({e, first, count[e]});
+    next.push_back(first);
+  }
+  plan.order.resize(nc);
+  for (std::size_t c = 0; c < nc; ++c) plan.order[next[entity_of_cell[c]]++] = c;
+  return plan;
+}
+
+void write_entities(Output &out, int dim, const EntityPlan &plan) {
+  out.text("$Entities\n");
+  for (int d = 0; d < 4; ++d)
+    out.size(d == dim ? plan.entities.size() : 0);
+  for (const Entity &e : plan.entities) {
+    out.int32(e.tag);
+    for (double x : e.lo)
+      out.raw<double>(x);
+    for (double x : e.hi)
+      out.raw<double>(x);
+    out.size(e.physical != 0 ? 1 : 0);
+    if (e.physical != 0)
+      out.int32(e.physical);
+    out.size(0); // no bounding entities
+  }
+  out.text("\n$EndEntities\n");
+}
+
+// A 2D mesh's z (kPlaneZArray), which goes into the nodes; null if none.
+const DataArray *plane_z_of(const Mesh &mesh) {
+  if (mesh.dim != 2) return nullptr;
+  for (const DataArray &a : mesh.point_data)
+    if (a.name == kPlaneZArray && a.components == 1) return &a;
+  return nullptr;
+}
+
+void write_nodes(Output &out, const Mesh &mesh, long long entity) {
+  const std::size_t nv = mesh.num_vertices();
+  const DataArray *plane_z = plane_z_of(mesh);
+  out.text("$Nodes\n");
+  out.size(nv ? 1 : 0);
+  out.size(nv);
+  out.size(nv ? 1 : 0);
+  out.size(nv);
+  if (nv) {
+    out.int32(mesh.dim);
+    out.int32(entity);
+    out.int32(0); // not parametric
+    out.size(nv);
+    for (std::size_t v = 0; v < nv; ++v)
+      out.size(v + 1);
+    for (std::size_t v = 0; v < nv; ++v)
+      for (int i = 0; i < 3; ++i)
+        out.raw<double>(i < mesh.dim ? mesh.point(VertexId(v))[i]
+                                     : plane_z ? plane_z->values[v] : 0.0);
+  }
+  out.text("\n$EndNodes\n");
+}
+
+void write_elements(Output &out, const Mesh &mesh, const EntityPlan &plan) {
+  const std::size_t nc = mesh.num_cells();
+  out.text("$Elements\n");
+  out.size(plan.blocks.size());
+  out.size(nc);
+  out.size(nc ? 1 : 0);
+  out.size(nc);
+  for (const Block &b : plan.blocks) {
+    out.int32(mesh.dim);
+    out.int32(plan.entities[b.entity].tag);
+    out.int32(mesh.dim == 2 ? kTriangle : kTetrahedron);
+    out.size(b.count);
+    for (std::size_t i = b.first; i < b.first + b.count; ++i) {
+      const std::size_t c = plan.order[i];
+      out.size(c + 1);
+      for (int k = 0; k <= mesh.dim; ++k)
+        out.size(std::uint64_t(mesh.cell(CellId(c))[k]) + 1);
+    }
+  }
+  out.text("\n$EndElements\n");
+}
+
+// One $NodeData/$ElementData section: time 0, time step 0. Row i is entity
+// order[i] (tag order[i] + 1; the identity when order is empty).
+void write_data(Output &out, const std::string &section, const DataArray &a, std::size_t n,
+                const std::vector<std::size_t> &order = {}) {
+  out.text("$" + section + "\n1\n\"" + a.name + "\"\n1\n0\n3\n0\n" + std::to_string(a.components) +
+           "\n" + std::to_string(n) + "\n");
+  const std::size_t nc = std::size_t(a.components);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t row = order.empty() ? i : order[i];
+    out.int32((long long)(row + 1));
+    for (std::size_t k = 0; k < nc; ++k)
+      out.raw<double>(a.values[row * nc + k]);
+  }
+  out.text("\n$End" + section + "\n");
+}
+
+} // namespace
+
+Mesh read_msh(const std::string &path) {
+  Source src(path);
+  MshFile f = parse(src);
+  return assemble(src, f);
+}
+
+void write_msh(const std::string &path, const Mesh &mesh) {
+  check_writable(path, mesh);
+  const DataArray *geom = entity_array(mesh, "gmsh:geometrical");
+  const DataArray *phys = entity_array(mesh, "gmsh:physical");
+  const EntityPlan plan = plan_entities(path, mesh, geom, phys);
+  Output out(path);
+  out.text("$MeshFormat\n4.1 1 8\n");
+  out.int32(1); // the endianness check
+  out.text("\n$EndMeshFormat\n");
+  // Without tag arrays there is no $Entities: reading gives no tag arrays back.
+  if (geom || phys)
+    write_entities(out, mesh.dim, plan);
+  write_nodes(out, mesh, plan.entities.empty() ? 1 : plan.entities.front().tag);
+  write_elements(out, mesh, plan);
+  for (const DataArray &a : mesh.point_data)
+    if (&a != plane_z_of(mesh))
+      write_data(out, "NodeData", a, mesh.num_vertices());
+  for (const DataArray &a : mesh.cell_data)
+    if (&a != geom && &a != phys)
+      write_data(out, "ElementData", a, mesh.num_cells(), plan.order);
+  out.close();
+}
+
+} // namespace bisect

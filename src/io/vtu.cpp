@@ -1,0 +1,319 @@
+// VTK XML unstructured grid (.vtu) reading and writing, both bisect's own:
+// vtu_read.cpp decodes a file (no VTK code runs on input, so no corrupt file
+// can crash a VTK reader), vtu_write.cpp writes one. This file turns the
+// decoded grid into a Mesh and checks a Mesh before writing.
+//
+// Conventions:
+//  - 2D: triangles with all z == 0; 3D: tetrahedra.
+//  - 4D: field data "SpatialDimension" == 4; Points hold (x, y, z); point
+//    array "t" (Float64, 1 component) holds the 4th coordinate; every
+//    pentatope is one VTK_POLY_VERTEX cell with 5 ids (VTK_CONVEX_POINT_SET
+//    with 5 ids is accepted on reading).
+#include "bisect/io.hpp"
+#include "bisect/output.hpp"
+#include "io/vtu_read.hpp"
+#include "io/vtu_write.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace bisect {
+namespace {
+
+// ---------------------------------------------------------------------------
+// Reading: vtu_read.cpp decodes the file; here the cells that make the mesh
+// are chosen and renumbered.
+
+// A linear VTK cell type: its topological dimension and number of point
+// ids (exact, or at least `ids` when `variable`).
+struct CellKind {
+  const char *name;
+  int dim;
+  int ids;
+  bool variable;
+};
+
+constexpr int kPolyVertex = 2, kTriangle = 5, kTetra = 10, kConvexPointSet = 41;
+
+const CellKind *linear_cell(int type) {
+  static const CellKind kinds[] = {
+      {"empty cell", -1, 0, false},      {"vertex", 0, 1, false},
+      {"poly-vertex", 0, 1, true},       {"line", 1, 2, false},
+      {"poly-line", 1, 2, true},         {"triangle", 2, 3, false},
+      {"triangle strip", 2, 3, true},    {"polygon", 2, 3, true},
+      {"pixel", 2, 4, false},            {"quad", 2, 4, false},
+      {"tetrahedron", 3, 4, false},      {"voxel", 3, 8, false},
+      {"hexahedron", 3, 8, false},       {"wedge", 3, 6, false},
+      {"pyramid", 3, 5, false},          {"pentagonal prism", 3, 10, false},
+      {"hexagonal prism", 3, 12, false}};
+  static const CellKind convex_point_set = {"convex point set", 3, 1, true};
+  static const CellKind polyhedron = {"polyhedron", 3, 4, true};
+  if (type >= 0 && type <= 16)
+    return &kinds[type];
+  if (type == kConvexPointSet)
+    return &convex_point_set;
+  if (type == 42)
+    return &polyhedron;
+  return nullptr;
+}
+
+// Every cell is a linear VTK cell with the number of ids its type has: no
+// cell of the file is dropped without a reason.
+void check_cell_types(const std::string &path, const vtu::Grid &g) {
+  for (std::size_t c = 0; c < g.num_cells; ++c) {
+    const int type = g.types[c];
+    const std::int64_t n = g.offsets[c + 1] - g.offsets[c];
+    const CellKind *kind = linear_cell(type);
+    const std::string cell = "cell " + std::to_string(c);
+    if (!kind)
+      throw InputError(path, cell + " has VTK type " + std::to_string(type) +
+                                 ", which is not a known linear cell type");
+    if (kind->dim < 0)
+      throw InputError(path, cell + " has VTK type 0 (an empty cell)");
+    if (kind->variable ? n < kind->ids : n != kind->ids)
+      throw InputError(path, cell + " (VTK type " + std::to_string(type) + ", " + kind->name +
+                                 ") has " + std::to_string(n) + " point ids, expected " +
+                                 (kind->variable ? "at least " : "") + std::to_string(kind->ids));
+  }
+}
+
+std::string array_name(const vtu::Array &a, std::size_t index) {
+  return a.name.empty() ? "unnamed" + std::to_string(index) : a.name;
+}
+
+// The first array of that name, numeric or not (as vtkFieldData::GetArray).
+const vtu::Array *find_array(const std::vector<vtu::Array> &arrays, const char *name) {
+  for (const auto &a : arrays)
+    if (a.name == name)
+      return &a;
+  return nullptr;
+}
+
+// The 4D convention is on when field data "SpatialDimension" says 4.
+bool is_4d(const vtu::Grid &g) {
+  const vtu::Array *sd = find_array(g.field_data, "SpatialDimension");
+  return sd && sd->numeric && !sd->values.empty() && sd->values[0] == 4.0;
+}
+
+// The cells kept by the reader (file ids) and the dimension they define.
+struct KeptCells {
+  int dim = 0;
+  std::vector<CellId> ids;
+};
+
+KeptCells select_cells_4d(const std::string &path, const vtu::Grid &g) {
+  KeptCells kept{4, {}};
+  for (std::size_t c = 0; c < g.num_cells; ++c) {
+    const int type = g.types[c];
+    const std::int64_t npts = g.offsets[c + 1] - g.offsets[c];
+    if (type == kPolyVertex || type == kConvexPointSet) {
+      if (npts != 5)
+        throw InputError(path, "4D mesh: cell " + std::to_string(c) + " has " +
+                                   std::to_string(npts) + " vertices, expected 5");
+      kept.ids.push_back(CellId(c));
+    } else if (type != 1 && type != 3 && type != kTriangle && type != kTetra) {
+      // Lower-dimensional simplices (boundary pieces) are ignored; anything
+      // else cannot be part of a pentatope mesh.
+      throw InputError(path, "4D mesh: cell " + std::to_string(c) + " has VTK type " +
+                                 std::to_string(type) +
+                                 ", expected a 5-vertex poly-vertex (type 2)");
+    }
+  }
+  if (kept.ids.empty())
+    throw InputError(path, "4D mesh: no pentatopes (5-vertex poly-vertex cells)");
+  return kept;
+}
+
+// Keeps the simplices of the highest dimension; lower-dimensional cells are
+// ignored, a non-simplex cell of that dimension or higher is an error.
+KeptCells select_cells(const std::string &path, const vtu::Grid &g) {
+  int dim = 0;
+  for (std::size_t c = 0; c < g.num_cells; ++c) {
+    if (g.types[c] == kTetra)
+      dim = 3;
+    else if (g.types[c] == kTriangle && dim < 2)
+      dim = 2;
+  }
+  if (dim == 0) {
+    for (std::size_t c = 0; c < g.num_cells; ++c)
+      if (linear_cell(g.types[c])->dim >= 2)
+        throw InputError(path, "no triangles or tetrahedra (found non-simplex cells, VTK "
+                               "type " + std::to_string(g.types[c]) + ")");
+    throw InputError(path, "no triangles or tetrahedra");
+  }
+  const int simplex = dim == 2 ? kTriangle : kTetra;
+  KeptCells kept{dim, {}};
+  kept.ids.reserve(g.num_cells);
+  for (std::size_t c = 0; c < g.num_cells; ++c) {
+    const int type = g.types[c];
+    if (type == simplex)
+      kept.ids.push_back(CellId(c));
+    else if (linear_cell(type)->dim >= dim)
+      throw InputError(path, "mixed non-simplex cells (VTK type " + std::to_string(type) + ")");
+  }
+  return kept;
+}
+
+// The selected tuples (file ids in `rows`) of `a`; all of them, in order,
+// are moved rather than copied.
+template <class Row>
+DataArray take_rows(vtu::Array &a, const std::string &name, const std::vector<Row> &rows,
+                    bool all_rows) {
+  DataArray out;
+  out.name = name;
+  out.components = a.components;
+  if (all_rows) {
+    out.values = std::move(a.values);
+    return out;
+  }
+  const std::size_t k = std::size_t(a.components);
+  out.values.resize(rows.size() * k);
+  double *to = out.values.data();
+  for (Row r : rows)
+    for (std::size_t j = 0; j < k; ++j)
+      *to++ = a.values[std::size_t(r) * k + j];
+  return out;
+}
+
+// The 4th coordinate array of the 4D convention, checked.
+const vtu::Array &time_array(const std::string &path, const vtu::Grid &g) {
+  const vtu::Array *t = find_array(g.point_data, "t");
+  if (!t || !t->numeric)
+    throw InputError(path, "4D mesh: point data array 't' (4th coordinate) is missing or not numeric");
+  if (t->components != 1)
+    throw InputError(path, "4D mesh: point data array 't' has " + std::to_string(t->components) +
+                               " components, expected 1");
+  return *t; // one value per point: the reader checked the count
+}
+
+Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
+  check_cell_types(path, g);
+  const bool four = is_4d(g);
+  const std::size_t np = g.num_points;
+  if (g.num_cells >= std::size_t(kNoCell))
+    throw InputError(path, "too many cells");
+  KeptCells kept = four ? select_cells_4d(path, g) : select_cells(path, g);
+  const vtu::Array *t = four ? &time_array(path, g) : nullptr;
+
+  // Cells, with their vertices numbered compactly in file order. (Ids are
+  // in range and each kept cell has dim + 1 of them: the reader and
+  // check_cell_types made sure.)
+  const int nvc = kept.dim + 1;
+  std::vector<VertexId> new_id(np, kNoVertex);
+  for (CellId c : kept.ids) {
+    const std::uint32_t *pts = g.connectivity.data() + g.offsets[c];
+    for (int i = 0; i < nvc; ++i) {
+      for (int j = 0; j < i; ++j)
+        if (pts[j] == pts[i])
+          throw InputError(path, "cell " + std::to_string(c) + " repeats point " +
+                                     std::to_string(pts[i]));
+      new_id[pts[i]] = 0; // used
+    }
+  }
+  std::vector<VertexId> used; // file ids of the kept points, in order
+  used.reserve(np);
+  for (std::size_t p = 0; p < np; ++p)
+    if (new_id[p] != kNoVertex) {
+      new_id[p] = VertexId(used.size());
+      used.push_back(VertexId(p));
+    }
+  const bool all_points = used.size() == np, all_cells = kept.ids.size() == g.num_cells;
+
+  Mesh mesh;
+  mesh.dim = kept.dim;
+  if (all_points && all_cells) {
+    // Every cell kept, every point used in file order: the ids stay as they are.
+    mesh.cells = std::move(g.connectivity);
+  } else {
+    mesh.cells.resize(kept.ids.size() * std::size_t(nvc));
+    VertexId *to = mesh.cells.data();
+    for (CellId c : kept.ids) {
+      const std::uint32_t *pts = g.connectivity.data() + g.offsets[c];
+      for (int i = 0; i < nvc; ++i)
+        *to++ = new_id[pts[i]];
+    }
+    g.connectivity = {}; // done with: free it before the arrays are copied
+  }
+
+  // Coordinates: (x, y) in 2D, (x, y, z) in 3D, (x, y, z, t) in 4D.
+  const bool move_points = mesh.dim == 3 && all_points;
+  bool off_plane = false;
+  if (!move_points)
+    mesh.coords.reserve(used.size() * std::size_t(mesh.dim));
+  for (VertexId p : used) {
+    double x[4] = {g.points[3 * p], g.points[3 * p + 1], g.points[3 * p + 2], 0};
+    if (four)
+      x[3] = t->values[p];
+    for (int k = 0; k < (four ? 4 : 3); ++k)
+      if (!std::isfinite(x[k]))
+        throw InputError(path, "point " + std::to_string(p) + " has a non-finite coordinate");
+    if (mesh.dim == 2 && x[2] != 0.0)
+      off_plane = true;
+    if (!move_points)
+      mesh.coords.insert(mesh.coords.end(), x, x + mesh.dim);
+  }
+  if (move_points)
+    mesh.coords = std::move(g.points); // x, y, z of every point, in order
+  if (off_plane) { // see settle_plane in io.cpp
+    DataArray z{kPlaneZArray, 1, {}};
+    z.values.reserve(used.size());
+    for (VertexId p : used) z.values.push_back(g.points[3 * p + 2]);
+    mesh.point_data.push_back(std::move(z));
+  }
+
+  // Numeric point and cell arrays; "t" of the 4D convention is a coordinate.
+  for (std::size_t i = 0; i < g.point_data.size(); ++i) {
+    vtu::Array &a = g.point_data[i];
+    if ((four && &a == t) || !a.numeric)
+      continue;
+    mesh.point_data.push_back(take_rows(a, array_name(a, i), used, all_points));
+  }
+  for (std::size_t i = 0; i < g.cell_data.size(); ++i) {
+    vtu::Array &a = g.cell_data[i];
+    if (a.numeric)
+      mesh.cell_data.push_back(take_rows(a, array_name(a, i), kept.ids, all_cells));
+  }
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------
+// Writing.
+
+void check_mesh_for_writing(const std::string &path, const Mesh &mesh) {
+  auto fail = [&](const std::string &what) { throw CheckError(path + ": cannot write: " + what); };
+  if (mesh.dim < 2 || mesh.dim > 4)
+    fail("mesh dimension " + std::to_string(mesh.dim) + " is not 2, 3 or 4");
+  if (mesh.coords.size() % mesh.dim || mesh.cells.size() % (mesh.dim + 1))
+    fail("coordinate or cell array has a partial entry");
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  for (VertexId v : mesh.cells)
+    if (v >= nv)
+      fail("a cell refers to vertex " + std::to_string(v) + " of " + std::to_string(nv));
+  for (const auto &a : mesh.point_data)
+    if (a.components < 1 || a.values.size() != nv * a.components)
+      fail("point array '" + a.name + "' does not have one tuple per vertex");
+  for (const auto &a : mesh.cell_data)
+    if (a.components < 1 || a.values.size() != nc * a.components)
+      fail("cell array '" + a.name + "' does not have one tuple per cell");
+  if (mesh.dim == 4)
+    for (const auto &a : mesh.point_data)
+      if (a.name == "t")
+        fail("point array 't' is reserved for the 4th coordinate of 4D meshes");
+}
+
+} // namespace
+
+Mesh read_vtu(const std::string &path) {
+  return grid_to_mesh(path, vtu::read_grid(path));
+}
+
+void write_vtu(const std::string &path, const Mesh &mesh, Compression compression) {
+  check_mesh_for_writing(path, mesh);
+  write_vtu_native(path, mesh, compression);
+}
+
+} // namespace bisect

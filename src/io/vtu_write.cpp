@@ -1,0 +1,270 @@
+// Native .vtu writer: VTK XML UnstructuredGrid, inline base64 binary
+// (format="binary": what VTK, ParaView and meshio all read; meshio misreads
+// raw appended data), UInt64 headers, little-endian, blocks of 32 KiB
+// compressed with zlib or LZ4, or not at all. Arrays are encoded straight
+// from the Mesh, one block at a time: no VTK objects, no copy of the mesh.
+//
+// The layout of one array (VTK's, vtkXMLWriter): uncompressed, one base64
+// stream of [byte count][bytes]; compressed, the base64 of the header
+// [blocks][block size][last block size][compressed size of each block]
+// followed by a second base64 stream of the compressed blocks.
+#include "io/vtu_write.hpp"
+
+#include "bisect/output.hpp"
+
+#include <lz4.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace bisect {
+namespace {
+
+constexpr std::size_t kBlock = 32768; // VTK's default block size
+
+// Buffered output with base64 encoding; write errors are kept and reported
+// once, naming the file.
+class Writer {
+public:
+  explicit Writer(const std::string &path) : path_(path), file_(std::fopen(path.c_str(), "wb")) {
+    if (!file_) throw InputError(path, "cannot write: " + write_failure(errno));
+    buf_.reserve(kBuffer + 8);
+  }
+  ~Writer() {
+    if (file_) std::fclose(file_);
+  }
+  Writer(const Writer &) = delete;
+  Writer &operator=(const Writer &) = delete;
+
+  void text(const std::string &s) {
+    buf_.append(s);
+    if (buf_.size() >= kBuffer) flush();
+  }
+
+  // base64 of `n` bytes, continuing the current base64 stream.
+  void base64(const unsigned char *p, std::size_t n) {
+    while (n > 0) {
+      if (carry_n_ > 0 || n < 3) {
+        carry_[carry_n_++] = *p++;
+        --n;
+        if (carry_n_ == 3) {
+          encode3(carry_);
+          carry_n_ = 0;
+        }
+        continue;
+      }
+      const std::size_t whole = n / 3 * 3;
+      for (std::size_t i = 0; i < whole; i += 3) encode3(p + i);
+      p += whole;
+      n -= whole;
+    }
+  }
+  // Ends a base64 stream (with '=' padding).
+  void end_base64() {
+    static const char *kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    if (carry_n_ == 1) {
+      const unsigned v = unsigned(carry_[0]) << 16;
+      buf_ += kDigits[v >> 18 & 63];
+      buf_ += kDigits[v >> 12 & 63];
+      buf_ += "==";
+    } else if (carry_n_ == 2) {
+      const unsigned v = unsigned(carry_[0]) << 16 | unsigned(carry_[1]) << 8;
+      buf_ += kDigits[v >> 18 & 63];
+      buf_ += kDigits[v >> 12 & 63];
+      buf_ += kDigits[v >> 6 & 63];
+      buf_ += '=';
+    }
+    carry_n_ = 0;
+  }
+
+  void close() {
+    flush();
+    if (std::fflush(file_) != 0 && !error_) error_ = errno ? errno : EIO;
+    if (std::fclose(file_) != 0 && !error_) error_ = errno ? errno : EIO;
+    file_ = nullptr;
+    if (error_) throw InputError(path_, "cannot write: " + write_failure(error_));
+  }
+
+private:
+  static constexpr std::size_t kBuffer = std::size_t(1) << 20;
+
+  void encode3(const unsigned char *p) {
+    static const char *kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    const unsigned v = unsigned(p[0]) << 16 | unsigned(p[1]) << 8 | unsigned(p[2]);
+    const char out[4] = {kDigits[v >> 18 & 63], kDigits[v >> 12 & 63], kDigits[v >> 6 & 63],
+                         kDigits[v & 63]};
+    buf_.append(out, 4);
+    if (buf_.size() >= kBuffer) flush();
+  }
+  void flush() {
+    if (!buf_.empty() && std::fwrite(buf_.data(), 1, buf_.size(), file_) != buf_.size() && !error_)
+      error_ = errno ? errno : EIO;
+    buf_.clear();
+  }
+
+  std::string path_;
+  std::FILE *file_;
+  std::string buf_;
+  unsigned char carry_[3] = {0, 0, 0};
+  int carry_n_ = 0;
+  int error_ = 0;
+};
+
+std::string xml_escaped(const std::string &s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+    case '&': out += "&amp;"; break;
+    case '<': out += "&lt;"; break;
+    case '>': out += "&gt;"; break;
+    case '"': out += "&quot;"; break;
+    case '\'': out += "&apos;"; break;
+    default: out += c;
+    }
+  }
+  return out;
+}
+
+template <class T> const char *type_name();
+template <> const char *type_name<double>() { return "Float64"; }
+template <> const char *type_name<std::int32_t>() { return "Int32"; }
+template <> const char *type_name<std::int64_t>() { return "Int64"; }
+template <> const char *type_name<std::uint8_t>() { return "UInt8"; }
+
+// Writes one DataArray element: `count` values of T, value(i) for the i-th.
+template <class T, class Value>
+void write_array(Writer &w, VtuCompression compression, int level, const std::string &name,
+                 int components, std::size_t count, Value value, const char *extra = "") {
+  w.text("        <DataArray type=\"" + std::string(type_name<T>()) + "\" Name=\"" +
+         xml_escaped(name) + "\"" + (components > 1 ? " NumberOfComponents=\"" + std::to_string(components) + "\"" : std::string()) +
+         extra + " format=\"binary\">\n          ");
+  const std::size_t bytes = count * sizeof(T);
+  const std::size_t per_block = kBlock / sizeof(T);
+  std::vector<T> raw;
+  raw.reserve(std::min(count, per_block));
+  auto fill = [&](std::size_t first) {
+    raw.clear();
+    const std::size_t last = std::min(count, first + per_block);
+    for (std::size_t i = first; i < last; ++i) raw.push_back(value(i));
+  };
+  if (compression == VtuCompression::None) {
+    const std::uint64_t header = bytes;
+    w.base64(reinterpret_cast<const unsigned char *>(&header), sizeof header);
+    for (std::size_t first = 0; first < count; first += per_block) {
+      fill(first);
+      w.base64(reinterpret_cast<const unsigned char *>(raw.data()), raw.size() * sizeof(T));
+    }
+    w.end_base64();
+  } else {
+    const std::size_t blocks = (bytes + kBlock - 1) / kBlock;
+    std::vector<std::uint64_t> header{blocks, kBlock, bytes % kBlock ? bytes % kBlock : (blocks ? kBlock : 0)};
+    std::vector<unsigned char> packed;
+    std::vector<unsigned char> tmp;
+    for (std::size_t first = 0; first < count; first += per_block) {
+      fill(first);
+      const auto *src = reinterpret_cast<const unsigned char *>(raw.data());
+      const std::size_t n = raw.size() * sizeof(T);
+      std::size_t out = 0;
+      if (compression == VtuCompression::Zlib) {
+        uLongf room = compressBound(uLong(n));
+        tmp.resize(room);
+        if (compress2(tmp.data(), &room, src, uLong(n), level) != Z_OK)
+          throw CheckError("zlib failed to compress array '" + name + "'");
+        out = room;
+      } else {
+        const int room = LZ4_compressBound(int(n));
+        tmp.resize(std::size_t(room));
+        const int got = LZ4_compress_default(reinterpret_cast<const char *>(src),
+                                             reinterpret_cast<char *>(tmp.data()), int(n), room);
+        if (got <= 0) throw CheckError("LZ4 failed to compress array '" + name + "'");
+        out = std::size_t(got);
+      }
+      header.push_back(out);
+      packed.insert(packed.end(), tmp.begin(), tmp.begin() + std::ptrdiff_t(out));
+    }
+    w.base64(reinterpret_cast<const unsigned char *>(header.data()), header.size() * sizeof(std::uint64_t));
+    w.end_base64();
+    w.base64(packed.data(), packed.size());
+    w.end_base64();
+  }
+  w.text("\n        </DataArray>\n");
+}
+
+// Integer-valued cell arrays (tags, ids, the bisection state) are written as
+// Int32, the rest as Float64 (as the VTK-based writer did).
+bool fits_int32(const std::vector<double> &values) {
+  for (double v : values)
+    if (!(v >= std::numeric_limits<std::int32_t>::min() &&
+          v <= std::numeric_limits<std::int32_t>::max() && v == std::trunc(v)))
+      return false;
+  return true;
+}
+
+} // namespace
+
+void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression compression,
+                      int level) {
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  const int dim = mesh.dim, nvc = dim + 1;
+  Writer w(path);
+  w.text("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+         "byte_order=\"LittleEndian\" header_type=\"UInt64\"");
+  if (compression == VtuCompression::Zlib) w.text(" compressor=\"vtkZLibDataCompressor\"");
+  if (compression == VtuCompression::Lz4) w.text(" compressor=\"vtkLZ4DataCompressor\"");
+  w.text(">\n  <UnstructuredGrid>\n");
+  if (dim == 4) {
+    w.text("    <FieldData>\n");
+    write_array<std::int32_t>(w, compression, level, "SpatialDimension", 1, 1,
+                              [](std::size_t) { return std::int32_t(4); }, " NumberOfTuples=\"1\"");
+    w.text("    </FieldData>\n");
+  }
+  w.text("    <Piece NumberOfPoints=\"" + std::to_string(nv) + "\" NumberOfCells=\"" +
+         std::to_string(nc) + "\">\n      <PointData>\n");
+  // A 2D mesh's z (kPlaneZArray) goes into the points, not into an array.
+  const DataArray *plane_z = nullptr;
+  for (const DataArray &a : mesh.point_data) {
+    if (dim == 2 && a.name == kPlaneZArray && a.components == 1) {
+      plane_z = &a;
+      continue;
+    }
+    write_array<double>(w, compression, level, a.name, a.components, a.values.size(),
+                        [&](std::size_t i) { return a.values[i]; });
+  }
+  if (dim == 4)
+    write_array<double>(w, compression, level, "t", 1, nv,
+                        [&](std::size_t v) { return mesh.coords[v * 4 + 3]; });
+  w.text("      </PointData>\n      <CellData>\n");
+  for (const DataArray &a : mesh.cell_data) {
+    if (fits_int32(a.values))
+      write_array<std::int32_t>(w, compression, level, a.name, a.components, a.values.size(),
+                                [&](std::size_t i) { return std::int32_t(a.values[i]); });
+    else
+      write_array<double>(w, compression, level, a.name, a.components, a.values.size(),
+                          [&](std::size_t i) { return a.values[i]; });
+  }
+  w.text("      </CellData>\n      <Points>\n");
+  write_array<double>(w, compression, level, "Points", 3, 3 * nv, [&](std::size_t i) {
+    const std::size_t v = i / 3, k = i % 3;
+    if (int(k) < dim) return mesh.coords[v * std::size_t(dim) + k];
+    return plane_z ? plane_z->values[v] : 0.0;
+  });
+  w.text("      </Points>\n      <Cells>\n");
+  write_array<std::int64_t>(w, compression, level, "connectivity", 1, mesh.cells.size(),
+                            [&](std::size_t i) { return std::int64_t(mesh.cells[i]); });
+  write_array<std::int64_t>(w, compression, level, "offsets", 1, nc,
+                            [&](std::size_t c) { return std::int64_t((c + 1) * std::size_t(nvc)); });
+  const std::uint8_t type = dim == 2 ? 5 : dim == 3 ? 10 : 2; // triangle, tetra, poly-vertex
+  write_array<std::uint8_t>(w, compression, level, "types", 1, nc, [&](std::size_t) { return type; });
+  w.text("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
+  w.close();
+}
+
+} // namespace bisect

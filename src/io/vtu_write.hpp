@@ -1,0 +1,22 @@
+// The native .vtu writer (vtu_write.cpp): VTK XML UnstructuredGrid with
+// inline base64 binary arrays, compressed per 32 KiB block.
+#pragma once
+
+#include "bisect/io.hpp"
+
+#include <string>
+
+namespace bisect {
+
+using VtuCompression = Compression;
+
+// Writes `mesh` to `path` (created or truncated, written sequentially, so a
+// FIFO or a device works). `level` is zlib's compression level (1-9).
+// Conventions as io_vtu.cpp: 2D triangles at z = 0, 3D tetrahedra, 4D
+// pentatopes as 5-vertex poly-vertex cells with the point array `t` and
+// field data SpatialDimension = 4; cell arrays holding only 32-bit integers
+// are Int32, other arrays Float64.
+void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression compression,
+                      int level = 1);
+
+} // namespace bisect

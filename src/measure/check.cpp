@@ -1,0 +1,1317 @@
+// Conformity checks and input validation (ALGORITHMS.md §7).
+//
+// Everything topological runs on sub-simplices identified by their sorted
+// vertex ids. Uniqueness is found without maps: sub-simplices are bucketed by
+// their smallest vertex id with a counting sort (in memory-bounded chunks),
+// then each small bucket is sorted by the remaining ids
+// (see for_each_subsimplex).
+//
+// Geometric tests use the same kernels as measure.cpp; the hanging-node test
+// hashes boundary vertices into a uniform grid and tests every boundary facet
+// against the vertices in its bounding box.
+#include "bisect/check.hpp"
+#include "core/dimension.hpp"
+
+#include "bisect/measure.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace bisect {
+namespace {
+
+// ---- local numbering of sub-simplices ---------------------------------------
+
+constexpr int binomial(int n, int k) {
+  int r = 1;
+  for (int i = 1; i <= k; ++i)
+    r = r * (n - k + i) / i;
+  return r;
+}
+
+// All K-subsets of {0..N-1} in lexicographic order. For K = N-1 (facets of a
+// cell with N vertices) subset m omits local vertex N-1-m.
+template <int N, int K> constexpr std::array<std::array<int, K>, binomial(N, K)> combinations() {
+  std::array<std::array<int, K>, binomial(N, K)> out{};
+  std::array<int, K> c{};
+  for (int i = 0; i < K; ++i)
+    c[i] = i;
+  for (int m = 0; m < binomial(N, K); ++m) {
+    out[m] = c;
+    int i = K - 1;
+    while (i >= 0 && c[i] == N - K + i)
+      --i;
+    if (i < 0)
+      break;
+    ++c[i];
+    for (int j = i + 1; j < K; ++j)
+      c[j] = c[j - 1] + 1;
+  }
+  return out;
+}
+
+template <int Dim> constexpr int opposite_of_facet(int m) {
+  return Dim - m;
+}
+
+template <int K> void sort_small(std::array<VertexId, K> &a) {
+  for (int i = 1; i < K; ++i)
+    for (int j = i; j > 0 && a[j] < a[j - 1]; --j)
+      std::swap(a[j], a[j - 1]);
+}
+
+// Calls visit(key, refs, count) once per distinct K-vertex sub-simplex of the
+// cells, with `key` its sorted vertex ids and refs[0..count) the references
+// cell * M + m (M sub-simplices per cell, m in lexicographic subset order).
+// Sub-simplices come in increasing key order. With `signs` (per-cell
+// orientation; facets only, K == Dim) bit 31 of each reference is set when
+// the facet's opposite vertex lies on the positive side of the facet (see
+// facet_side), so the visitor never has to look the cell up again.
+//
+// Counting sort by smallest id, in chunks of consecutive smallest ids so the
+// buffer stays below kChunkBytes: each chunk scans the cells (sequentially)
+// and stores, per sub-simplex whose smallest id falls in the chunk, one
+// integer packing the other K-1 ids and the reference, high to low bits.
+// Sorting a bucket of those integers groups equal sub-simplices; the cells
+// are never visited in random order.
+constexpr std::size_t kChunkBytes = std::size_t(96) << 20;
+
+constexpr std::uint32_t kSideBit = std::uint32_t(1) << 31;
+
+template <int Dim> int facet_side(const VertexId *cell, int m, int cell_sign);
+
+template <int Bits>
+using UIntFor =
+    std::conditional_t<Bits <= 32, std::uint32_t,
+                       std::conditional_t<Bits <= 64, std::uint64_t, unsigned __int128>>;
+
+// SideOnly (facets, with `signs`, fewer than 2^31 vertices): refs[i] holds
+// only the side bit (kSideBit or 0), and the buffer packs the other ids in 31
+// bits each plus that bit: half the memory for tets (the final check).
+// WithRefs = false: only counts matter (refs is nullptr), the buffer holds the
+// K-1 ids alone.
+template <int Dim, int K, bool WithRefs = true, bool SideOnly = false, class Visit>
+void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
+                         const std::vector<std::int8_t> *signs = nullptr) {
+  static_assert(K >= 2 && K <= 4);
+  static constexpr auto subsets = combinations<Dim + 1, K>();
+  constexpr int M = int(subsets.size());
+  static_assert(!SideOnly || (WithRefs && K == Dim));
+  constexpr int kRefBits = SideOnly ? 1 : WithRefs ? 32 : 0;
+  constexpr int kIdBits = SideOnly ? 31 : 32;
+  using Packed = UIntFor<kIdBits * (K - 1) + kRefBits>;
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  if (nc * M >= std::size_t(kSideBit))
+    throw std::length_error("mesh too large for 32-bit sub-simplex references");
+  if (SideOnly && nv >= std::size_t(kSideBit))
+    throw std::length_error("mesh too large for 31-bit vertex ids");
+  auto min_of = [&](const VertexId *cell, int m) {
+    VertexId v = cell[subsets[m][0]];
+    for (int i = 1; i < K; ++i)
+      v = std::min(v, cell[subsets[m][i]]);
+    return v;
+  };
+  // start[v] .. start[v+1]: bucket of smallest id v, over all chunks.
+  std::vector<std::size_t> start(nv + 1, 0);
+  for (std::size_t c = 0; c < nc; ++c)
+    for (int m = 0; m < M; ++m)
+      ++start[min_of(mesh.cell(CellId(c)), m) + 1];
+  for (std::size_t v = 1; v <= nv; ++v)
+    start[v] += start[v - 1];
+
+  const std::size_t cap = std::max<std::size_t>(kChunkBytes / sizeof(Packed), 1);
+  std::vector<Packed> buffer;
+  std::vector<std::size_t> cursor;
+  std::vector<std::uint32_t> group;
+  std::array<VertexId, K> key;
+  for (std::size_t v0 = 0; v0 < nv;) {
+    std::size_t v1 = v0 + 1; // the chunk is [v0, v1), at least one bucket
+    while (v1 < nv && start[v1 + 1] - start[v0] <= cap)
+      ++v1;
+    buffer.resize(start[v1] - start[v0]);
+    cursor.assign(start.begin() + v0, start.begin() + v1);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const VertexId *cell = mesh.cell(CellId(c));
+      for (int m = 0; m < M; ++m) {
+        const VertexId low = min_of(cell, m);
+        if (low < v0 || low >= v1)
+          continue;
+        for (int i = 0; i < K; ++i)
+          key[i] = cell[subsets[m][i]];
+        sort_small<K>(key);
+        unsigned __int128 p = 0;
+        for (int j = 1; j < K; ++j)
+          p = (p << kIdBits) | key[j];
+        if constexpr (SideOnly) {
+          p = (p << 1) | unsigned(signs && facet_side<Dim>(cell, m, (*signs)[c]) > 0);
+        } else if constexpr (WithRefs) {
+          std::uint32_t ref = std::uint32_t(c * M + m);
+          if constexpr (K == Dim)
+            if (signs && facet_side<Dim>(cell, m, (*signs)[c]) > 0)
+              ref |= kSideBit;
+          p = (p << 32) | ref;
+        }
+        buffer[cursor[low - v0]++ - start[v0]] = Packed(p);
+      }
+    }
+    for (std::size_t v = v0; v < v1; ++v) {
+      const auto first = buffer.begin() + (start[v] - start[v0]);
+      const auto last = buffer.begin() + (start[v + 1] - start[v0]);
+      std::sort(first, last);
+      key[0] = VertexId(v);
+      for (auto i = first; i != last;) {
+        const Packed rest = *i >> kRefBits;
+        group.clear();
+        auto j = i;
+        for (; j != last && (*j >> kRefBits) == rest; ++j)
+          if constexpr (SideOnly)
+            group.push_back(std::uint32_t(*j & 1u) ? kSideBit : 0u);
+          else if constexpr (WithRefs)
+            group.push_back(std::uint32_t(*j));
+        for (int t = K - 1; t >= 1; --t)
+          key[t] = VertexId((rest >> (kIdBits * (K - 1 - t))) & Packed(0xFFFFFFFFu >> (32 - kIdBits)));
+        visit(std::as_const(key), WithRefs ? group.data() : nullptr, int(j - i));
+        i = j;
+      }
+    }
+    v0 = v1;
+  }
+}
+
+template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
+  std::size_t n = 0;
+  for_each_subsimplex<Dim, K, false>(mesh, [&](const auto &, const std::uint32_t *, int) { ++n; });
+  return n;
+}
+
+// ---- small geometry ---------------------------------------------------------
+
+template <int Dim> double squared_distance(const double *p, const double *q) {
+  double s = 0;
+  for (int i = 0; i < Dim; ++i)
+    s += (p[i] - q[i]) * (p[i] - q[i]);
+  return s;
+}
+
+
+// Solves the n x n system G x = b (n <= 4) by elimination with pivoting;
+// false when G is singular.
+bool small_solve(double *g, double *b, int n, double *x) {
+  for (int k = 0; k < n; ++k) {
+    int p = k;
+    for (int i = k + 1; i < n; ++i)
+      if (std::abs(g[i * n + k]) > std::abs(g[p * n + k]))
+        p = i;
+    if (!(std::abs(g[p * n + k]) > 0))
+      return false;
+    if (p != k) {
+      for (int j = 0; j < n; ++j)
+        std::swap(g[k * n + j], g[p * n + j]);
+      std::swap(b[k], b[p]);
+    }
+    for (int i = k + 1; i < n; ++i) {
+      const double f = g[i * n + k] / g[k * n + k];
+      for (int j = k; j < n; ++j)
+        g[i * n + j] -= f * g[k * n + j];
+      b[i] -= f * b[k];
+    }
+  }
+  for (int k = n - 1; k >= 0; --k) {
+    double s = b[k];
+    for (int j = k + 1; j < n; ++j)
+      s -= g[k * n + j] * x[j];
+    x[k] = s / g[k * n + k];
+  }
+  return true;
+}
+
+// (Dim-1)-measure of the facet with vertex rows p[0..Dim): sqrt(det Gram)/(Dim-1)!.
+template <int Dim> double facet_measure(const double *p) {
+  constexpr int n = Dim - 1;
+  double e[n][Dim];
+  for (int i = 0; i < n; ++i)
+    for (int d = 0; d < Dim; ++d)
+      e[i][d] = p[(i + 1) * Dim + d] - p[d];
+  double g[n * n];
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      double s = 0;
+      for (int d = 0; d < Dim; ++d)
+        s += e[i][d] * e[j][d];
+      g[i * n + j] = s;
+    }
+  double fact = 1;
+  for (int i = 2; i <= n; ++i)
+    fact *= i;
+  return std::sqrt(std::max(0.0, determinant(g, n))) / fact;
+}
+
+template <int Dim> double longest_squared_edge(const double *p) {
+  double l = 0;
+  for (int i = 0; i <= Dim; ++i)
+    for (int j = i + 1; j <= Dim; ++j)
+      l = std::max(l, squared_distance<Dim>(p + i * Dim, p + j * Dim));
+  return l;
+}
+
+// Degenerate: |vol| <= 1e-14 * (longest edge)^n.
+template <int Dim> bool degenerate(const double *p, double volume) {
+  const double l2 = longest_squared_edge<Dim>(p);
+  double ln = Dim % 2 ? std::sqrt(l2) : 1; // l^Dim
+  for (int i = 0; i < Dim / 2; ++i)
+    ln *= l2;
+  return !(std::abs(volume) > 1e-14 * ln);
+}
+
+// Tolerance for "x lies on a facet", relative to the facet's longest edge and
+// in barycentric coordinates.
+constexpr double kOnFacetTol = 1e-8;
+
+// Whether point x lies in the closed facet p[0..Dim) (rows): its distance to
+// the facet's affine hull is tiny and its barycentric coordinates are >= 0.
+template <int Dim> bool on_facet(const double *p, const double *x) {
+  constexpr int n = Dim - 1;
+  double e[n][Dim], d[Dim];
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < Dim; ++k)
+      e[i][k] = p[(i + 1) * Dim + k] - p[k];
+  for (int k = 0; k < Dim; ++k)
+    d[k] = x[k] - p[k];
+  double g[n * n], b[n], lambda[n];
+  double size2 = 0;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      double s = 0;
+      for (int k = 0; k < Dim; ++k)
+        s += e[i][k] * e[j][k];
+      g[i * n + j] = s;
+    }
+    double s = 0;
+    for (int k = 0; k < Dim; ++k)
+      s += e[i][k] * d[k];
+    b[i] = s;
+  }
+  for (int i = 0; i < Dim; ++i)
+    for (int j = i + 1; j < Dim; ++j)
+      size2 = std::max(size2, squared_distance<Dim>(p + i * Dim, p + j * Dim));
+  if (!small_solve(g, b, n, lambda))
+    return false;
+  double rest = 1, r2 = 0;
+  for (int i = 0; i < n; ++i) {
+    if (lambda[i] < -kOnFacetTol)
+      return false;
+    rest -= lambda[i];
+  }
+  if (rest < -kOnFacetTol)
+    return false;
+  for (int k = 0; k < Dim; ++k) {
+    double r = d[k];
+    for (int i = 0; i < n; ++i)
+      r -= lambda[i] * e[i][k];
+    r2 += r * r;
+  }
+  return r2 <= kOnFacetTol * kOnFacetTol * size2;
+}
+
+template <int Dim> void gather(const Mesh &mesh, const VertexId *ids, int count, double *out) {
+  for (int k = 0; k < count; ++k) {
+    const double *q = mesh.point(ids[k]);
+    for (int d = 0; d < Dim; ++d)
+      out[k * Dim + d] = q[d];
+  }
+}
+
+// ---- messages ---------------------------------------------------------------
+
+template <std::size_t K> std::string id_list(const std::array<VertexId, K> &key) {
+  std::string s = "(";
+  for (std::size_t i = 0; i < K; ++i)
+    s += (i ? ", " : "") + std::to_string(key[i]);
+  return s + ")";
+}
+
+std::string id_list(const VertexId *ids, int count) {
+  std::string s = "(";
+  for (int i = 0; i < count; ++i)
+    s += (i ? ", " : "") + std::to_string(ids[i]);
+  return s + ")";
+}
+
+std::string format(const char *fmt, double a, double b, double c) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c);
+  return buf;
+}
+
+// ---- the passes -------------------------------------------------------------
+
+// What one walk over the facets finds.
+struct FacetReport {
+  std::size_t facets = 0;          // distinct facets
+  std::size_t boundary_facets = 0; // owned by one cell
+  double boundary_measure = 0;
+  double smallest_boundary_facet = INFINITY; // measure
+  std::vector<VertexId> boundary; // Dim sorted ids per boundary facet
+  std::string
+      nonmanifold; // first facet shared by 3+ cells, e.g. "facet (1, 2, 3) is shared by 3 cells"
+  std::string overlap; // first folded pair, e.g. "cells 5 and 9 overlap across facet (1, 2, 3)"
+};
+
+// Side of the facet's hyperplane on which the opposite vertex of facet m of
+// cell c lies, i.e. the sign of orient(facet ids sorted, opposite vertex).
+// That tuple is a permutation of the cell's tuple, so the sign is the cell's
+// orientation times the permutation's parity: moving the opposite vertex from
+// local position j to the end takes Dim - j transpositions, sorting the rest
+// one per inversion. No geometry beyond the cell's own sign is needed.
+template <int Dim> int facet_side(const VertexId *cell, int m, int cell_sign) {
+  const int j = opposite_of_facet<Dim>(m);
+  std::array<VertexId, Dim> rest;
+  for (int i = 0, k = 0; i <= Dim; ++i)
+    if (i != j)
+      rest[k++] = cell[i];
+  int parity = Dim - j;
+  for (int i = 0; i < Dim; ++i)
+    for (int k = i + 1; k < Dim; ++k)
+      parity += rest[i] > rest[k];
+  return parity % 2 ? -cell_sign : cell_sign;
+}
+
+// One walk over the distinct facets. With `signs` (per-cell orientation,
+// 0 for degenerate cells) it also checks that across every interior facet
+// the two opposite vertices lie on opposite sides of the facet's hyperplane.
+// SideOnly (needs `signs` without degenerate cells): the lighter walk of the
+// final check; an overlap is reported by its facet only.
+template <int Dim, bool SideOnly = false>
+FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs,
+                       bool keep_boundary) {
+  constexpr int M = Dim + 1;
+  FacetReport r;
+  double pts[Dim * Dim];
+  for_each_subsimplex<Dim, Dim, true, SideOnly>(
+      mesh,
+      [&](const std::array<VertexId, Dim> &key, const std::uint32_t *refs, int count) {
+        ++r.facets;
+        if (count == 1) {
+          ++r.boundary_facets;
+          gather<Dim>(mesh, key.data(), Dim, pts);
+          const double measure = facet_measure<Dim>(pts);
+          r.boundary_measure += measure;
+          r.smallest_boundary_facet = std::min(r.smallest_boundary_facet, measure);
+          if (keep_boundary)
+            r.boundary.insert(r.boundary.end(), key.begin(), key.end());
+        } else if (count == 2) {
+          if (!signs || !r.overlap.empty())
+            return;
+          if constexpr (SideOnly) {
+            if (refs[0] == refs[1])
+              r.overlap = "two cells overlap across facet " + id_list(key);
+            return;
+          }
+          const CellId cells[2] = {CellId((refs[0] & ~kSideBit) / M),
+                                   CellId((refs[1] & ~kSideBit) / M)};
+          // Degenerate cells (sign 0) are reported before this pass; skip them.
+          if ((*signs)[cells[0]] == 0 || (*signs)[cells[1]] == 0)
+            return;
+          if ((refs[0] & kSideBit) == (refs[1] & kSideBit))
+            r.overlap = "cells " + std::to_string(cells[0]) + " and " + std::to_string(cells[1]) +
+                        " overlap across facet " + id_list(key);
+        } else if (r.nonmanifold.empty()) {
+          r.nonmanifold =
+              "facet " + id_list(key) + " is shared by " + std::to_string(count) + " cells";
+        }
+      },
+      signs);
+  return r;
+}
+
+// First cell with an id out of range, e.g. "cell 5 refers to vertex 99, but
+// there are only 12 vertices"; empty when all ids are valid.
+std::string check_ids(const Mesh &mesh) {
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  const int n = mesh.cell_size();
+  for (std::size_t c = 0; c < nc; ++c)
+    for (int k = 0; k < n; ++k)
+      if (mesh.cells[c * n + k] >= nv)
+        return "cell " + std::to_string(c) + " refers to vertex " +
+               std::to_string(mesh.cells[c * n + k]) + ", but there are only " +
+               std::to_string(nv) + " vertices";
+  return {};
+}
+
+std::string check_shape(const Mesh &mesh) {
+  if (mesh.dim < 2 || mesh.dim > 4)
+    return "unsupported dimension " + std::to_string(mesh.dim) + " (expected 2, 3 or 4)";
+  if (mesh.coords.size() % mesh.dim != 0)
+    return "coordinate array length " + std::to_string(mesh.coords.size()) +
+           " is not a multiple of the dimension " + std::to_string(mesh.dim);
+  if (mesh.cells.size() % (mesh.dim + 1) != 0)
+    return "cell array length " + std::to_string(mesh.cells.size()) + " is not a multiple of " +
+           std::to_string(mesh.dim + 1);
+  return {};
+}
+
+// Sum of |volume|; `first_degenerate` set to the first degenerate cell (or
+// -1); `signs`, when given, receives each cell's orientation (0 if degenerate).
+template <int Dim>
+double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_volume,
+                 std::vector<std::int8_t> *signs = nullptr) {
+  const std::size_t nc = mesh.num_cells();
+  double pts[(Dim + 1) * Dim];
+  double total = 0;
+  first_degenerate = std::size_t(-1);
+  if (signs)
+    signs->assign(nc, 0);
+  for (std::size_t c = 0; c < nc; ++c) {
+    gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
+    const double v = signed_volume(pts, Dim);
+    total += std::abs(v);
+    const bool bad = degenerate<Dim>(pts, v);
+    if (signs && !bad)
+      (*signs)[c] = v > 0 ? 1 : -1;
+    if (bad && first_degenerate == std::size_t(-1)) {
+      first_degenerate = c;
+      its_volume = v;
+    }
+  }
+  return total;
+}
+
+// V - E + F - ... over the vertices used by cells; `facets` is the number of
+// distinct facets (already known from facet_pass).
+template <int Dim> long long euler_characteristic(const Mesh &mesh, std::size_t facets) {
+  std::vector<char> used(mesh.num_vertices(), 0);
+  for (VertexId v : mesh.cells)
+    used[v] = 1;
+  long long chi = std::count(used.begin(), used.end(), 1);
+  long long sign = -1;
+  auto add = [&](long long count) {
+    chi += sign * count;
+    sign = -sign;
+  };
+  if constexpr (Dim >= 3)
+    add((long long)count_subsimplices<Dim, 2>(mesh));
+  if constexpr (Dim >= 4)
+    add((long long)count_subsimplices<Dim, 3>(mesh));
+  add((long long)facets);
+  add((long long)mesh.num_cells());
+  return chi;
+}
+
+// Hanging nodes: a vertex lying on the closed boundary facet it does not
+// belong to. In a conforming mesh the only vertices on a closed facet are its
+// own (cells meet in common faces); a non-conforming interface shows up as
+// boundary facets on both sides, so only boundary facets and boundary
+// vertices need to be searched. Boundary vertices go into a uniform grid
+// (cell size = mean facet extent) stored as sorted (cell key, vertex) pairs;
+// each facet visits the grid cells its bounding box covers.
+//
+// Then the same search with the centroids of the boundary facets in place of
+// the vertices: two cells that split their shared face differently without a
+// hanging node (each side's sub-facets use the same vertices but other
+// diagonals) leave two patches of boundary facets covering the same part of
+// the face, so the centroid of one lies on a facet of the other. In a valid
+// mesh a boundary facet's centroid is in its relative interior, which no
+// other boundary facet meets (they share at most a proper face), so this
+// never fires on a conforming mesh.
+template <int Dim>
+std::string find_hanging_node(const Mesh &mesh, const std::vector<VertexId> &bnd) {
+  const std::size_t nb = bnd.size() / Dim;
+  if (nb == 0)
+    return {};
+  std::vector<char> is_bnd(mesh.num_vertices(), 0);
+  for (VertexId v : bnd)
+    is_bnd[v] = 1;
+
+  double lo[Dim], hi[Dim];
+  std::fill(lo, lo + Dim, 1e300);
+  std::fill(hi, hi + Dim, -1e300);
+  for (std::size_t v = 0; v < is_bnd.size(); ++v)
+    if (is_bnd[v])
+      for (int d = 0; d < Dim; ++d) {
+        lo[d] = std::min(lo[d], mesh.point(VertexId(v))[d]);
+        hi[d] = std::max(hi[d], mesh.point(VertexId(v))[d]);
+      }
+  double h = 0;
+  double pts[Dim * Dim];
+  for (std::size_t f = 0; f < nb; ++f) {
+    gather<Dim>(mesh, &bnd[f * Dim], Dim, pts);
+    double ext = 0;
+    for (int d = 0; d < Dim; ++d) {
+      double a = pts[d], b = pts[d];
+      for (int k = 1; k < Dim; ++k)
+        a = std::min(a, pts[k * Dim + d]), b = std::max(b, pts[k * Dim + d]);
+      ext = std::max(ext, b - a);
+    }
+    h += ext;
+  }
+  h /= double(nb);
+  if (!(h > 0))
+    return {};
+
+  constexpr int kBits = 64 / Dim;
+  constexpr double kMaxCells = double((std::uint64_t(1) << (kBits - 1)) - 1);
+  double cell_size[Dim];
+  std::int64_t ncell[Dim];
+  for (int d = 0; d < Dim; ++d) {
+    const double ext = hi[d] - lo[d];
+    cell_size[d] = std::max(h, ext / kMaxCells);
+    ncell[d] = std::int64_t(ext / cell_size[d]) + 1;
+  }
+  auto index = [&](double x, int d) {
+    const double t = std::floor((x - lo[d]) / cell_size[d]);
+    return std::int64_t(std::clamp(t, 0.0, double(ncell[d] - 1)));
+  };
+  auto key_of = [&](const std::int64_t *idx) {
+    std::uint64_t k = 0;
+    for (int d = 0; d < Dim; ++d)
+      k |= std::uint64_t(idx[d]) << (kBits * d);
+    return k;
+  };
+
+  // Pass 0: boundary vertices (payload: the vertex id); pass 1: centroids of
+  // boundary facets (payload: the facet's index in bnd).
+  std::vector<double> centroids(nb * Dim, 0.0);
+  for (std::size_t f = 0; f < nb; ++f)
+    for (int k = 0; k < Dim; ++k)
+      for (int d = 0; d < Dim; ++d)
+        centroids[f * Dim + d] += mesh.point(bnd[f * Dim + k])[d] / Dim;
+  std::vector<std::pair<std::uint64_t, std::size_t>> grid;
+  for (int pass = 0; pass < 2; ++pass) {
+    grid.clear();
+    auto point_of = [&](std::size_t payload) {
+      return pass == 0 ? mesh.point(VertexId(payload)) : &centroids[payload * Dim];
+    };
+    auto add = [&](std::size_t payload) {
+      std::int64_t idx[Dim];
+      for (int d = 0; d < Dim; ++d)
+        idx[d] = index(point_of(payload)[d], d);
+      grid.push_back({key_of(idx), payload});
+    };
+    if (pass == 0) {
+      for (std::size_t v = 0; v < is_bnd.size(); ++v)
+        if (is_bnd[v])
+          add(v);
+    } else {
+      for (std::size_t f = 0; f < nb; ++f)
+        add(f);
+    }
+    std::sort(grid.begin(), grid.end());
+
+    for (std::size_t f = 0; f < nb; ++f) {
+      const VertexId *ids = &bnd[f * Dim];
+      gather<Dim>(mesh, ids, Dim, pts);
+      double flo[Dim], fhi[Dim], size2 = 0;
+      for (int i = 0; i < Dim; ++i)
+        for (int j = i + 1; j < Dim; ++j)
+          size2 = std::max(size2, squared_distance<Dim>(pts + i * Dim, pts + j * Dim));
+      const double pad = 2 * kOnFacetTol * std::sqrt(size2);
+      std::int64_t ilo[Dim], ihi[Dim];
+      double cover = 1;
+      for (int d = 0; d < Dim; ++d) {
+        flo[d] = fhi[d] = pts[d];
+        for (int k = 1; k < Dim; ++k)
+          flo[d] = std::min(flo[d], pts[k * Dim + d]), fhi[d] = std::max(fhi[d], pts[k * Dim + d]);
+        flo[d] -= pad;
+        fhi[d] += pad;
+        ilo[d] = index(flo[d], d);
+        ihi[d] = index(fhi[d], d);
+        cover *= double(ihi[d] - ilo[d] + 1);
+      }
+      auto test = [&](std::size_t payload) {
+        if (pass == 0 ? std::find(ids, ids + Dim, VertexId(payload)) != ids + Dim : payload == f)
+          return false;
+        const double *x = point_of(payload);
+        for (int d = 0; d < Dim; ++d)
+          if (x[d] < flo[d] || x[d] > fhi[d])
+            return false;
+        return on_facet<Dim>(pts, x);
+      };
+      auto report = [&](std::size_t payload) {
+        if (pass == 0)
+          return "vertex " + std::to_string(payload) + " lies on facet " + id_list(ids, Dim) +
+                 " (hanging node)";
+        return "boundary facets " + id_list(&bnd[payload * Dim], Dim) + " and " +
+               id_list(ids, Dim) +
+               " overlap: the cells on the two sides of a face split it differently";
+      };
+      if (cover > double(grid.size())) { // a huge facet: scanning everything is cheaper
+        for (const auto &g : grid)
+          if (test(g.second))
+            return report(g.second);
+        continue;
+      }
+      std::int64_t idx[Dim];
+      std::copy(ilo, ilo + Dim, idx);
+      for (;;) {
+        const std::uint64_t k = key_of(idx);
+        auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(k, std::size_t(0)));
+        for (; it != grid.end() && it->first == k; ++it)
+          if (test(it->second))
+            return report(it->second);
+        int d = 0;
+        while (d < Dim && idx[d] == ihi[d])
+          idx[d] = ilo[d], ++d;
+        if (d == Dim)
+          break;
+        ++idx[d];
+      }
+    }
+  }
+  return {};
+}
+
+// Cells overlapping without sharing a facet (which the facet pass cannot see):
+// in a valid mesh the centroid of a cell lies in no other cell. Centroids go
+// into a uniform grid of the mean cell extent; each cell tests the centroids
+// in the grid cells its bounding box covers. Not a proof of validity (two
+// thin crossing cells may keep their centroids apart), but cheap and exact in
+// what it reports.
+template <int Dim> std::string find_overlap(const Mesh &mesh) {
+  constexpr int N = Dim + 1;
+  const std::size_t nc = mesh.num_cells();
+  if (nc < 2) return {};
+  std::vector<double> centroid(nc * Dim, 0.0);
+  double lo[Dim], hi[Dim], h = 0;
+  std::fill(lo, lo + Dim, 1e300);
+  std::fill(hi, hi + Dim, -1e300);
+  double pts[N * Dim];
+  for (std::size_t c = 0; c < nc; ++c) {
+    gather<Dim>(mesh, mesh.cell(CellId(c)), N, pts);
+    double ext = 0;
+    for (int d = 0; d < Dim; ++d) {
+      double a = pts[d], b = pts[d], sum = 0;
+      for (int k = 0; k < N; ++k) {
+        a = std::min(a, pts[k * Dim + d]);
+        b = std::max(b, pts[k * Dim + d]);
+        sum += pts[k * Dim + d];
+      }
+      centroid[c * Dim + d] = sum / N;
+      lo[d] = std::min(lo[d], a);
+      hi[d] = std::max(hi[d], b);
+      ext = std::max(ext, b - a);
+    }
+    h += ext;
+  }
+  h /= double(nc);
+  if (!(h > 0)) return {};
+  constexpr int kBits = 64 / Dim;
+  // Grid cells of half the mean extent hold a few centroids each (a cell of
+  // the mean extent held ~40 in 3D, most of them outside the box tested).
+  constexpr int kSplit = 2;
+  std::int64_t ncell[Dim];
+  double size[Dim];
+  for (int d = 0; d < Dim; ++d) {
+    size[d] = std::max(h / kSplit, (hi[d] - lo[d]) / double((std::uint64_t(1) << (kBits - 1)) - 1));
+    ncell[d] = std::int64_t((hi[d] - lo[d]) / size[d]) + 1;
+  }
+  auto index = [&](double x, int d) {
+    return std::int64_t(std::clamp(std::floor((x - lo[d]) / size[d]), 0.0, double(ncell[d] - 1)));
+  };
+  auto key_of = [&](const std::int64_t *idx) {
+    std::uint64_t k = 0;
+    for (int d = 0; d < Dim; ++d) k |= std::uint64_t(idx[d]) << (kBits * d);
+    return k;
+  };
+  std::vector<std::pair<std::uint64_t, CellId>> grid(nc);
+  for (std::size_t c = 0; c < nc; ++c) {
+    std::int64_t idx[Dim];
+    for (int d = 0; d < Dim; ++d) idx[d] = index(centroid[c * Dim + d], d);
+    grid[c] = {key_of(idx), CellId(c)};
+  }
+  std::sort(grid.begin(), grid.end());
+  // The centroids in grid order, so that a grid cell's are read in sequence.
+  std::vector<double> ordered(nc * Dim);
+  for (std::size_t i = 0; i < nc; ++i)
+    std::copy_n(&centroid[std::size_t(grid[i].second) * Dim], Dim, &ordered[i * Dim]);
+  // Barycentric coordinates in cell c: lambda[1..Dim] = inv (x - p0), with
+  // inv the inverse of the edge matrix (columns p_j - p0), made once per cell
+  // when a centroid first falls in its box; lambda[0] = 1 - the rest.
+  double inv[Dim * Dim];
+  int inv_state = 0; // 0 not made yet, 1 made, -1 the cell is singular
+  auto make_inverse = [&]() {
+    for (int j = 0; j < Dim; ++j) {
+      double g[Dim * Dim], b[Dim], col[Dim];
+      for (int r = 0; r < Dim; ++r) {
+        for (int k = 0; k < Dim; ++k)
+          g[r * Dim + k] = pts[(k + 1) * Dim + r] - pts[r];
+        b[r] = r == j ? 1.0 : 0.0;
+      }
+      if (!small_solve(g, b, Dim, col))
+        return false;
+      for (int r = 0; r < Dim; ++r)
+        inv[r * Dim + j] = col[r];
+    }
+    return true;
+  };
+  for (std::size_t c = 0; c < nc; ++c) {
+    gather<Dim>(mesh, mesh.cell(CellId(c)), N, pts);
+    inv_state = 0;
+    std::int64_t ilo[Dim], ihi[Dim], idx[Dim];
+    double cover = 1, blo[Dim], bhi[Dim];
+    for (int d = 0; d < Dim; ++d) {
+      double a = pts[d], b = pts[d];
+      for (int k = 1; k < N; ++k) a = std::min(a, pts[k * Dim + d]), b = std::max(b, pts[k * Dim + d]);
+      blo[d] = a;
+      bhi[d] = b;
+      ilo[d] = index(a, d);
+      ihi[d] = index(b, d);
+      cover *= double(ihi[d] - ilo[d] + 1);
+    }
+    if (cover > (4096 << Dim)) continue; // a huge cell among small ones: skipped, not worth the scan
+    std::copy(ilo, ilo + Dim, idx);
+    for (;;) {
+      // idx[0] fills the low bits of the key, so the grid cells ilo[0]..ihi[0]
+      // of one row are one key range: one search per row.
+      idx[0] = ilo[0];
+      const std::uint64_t first = key_of(idx);
+      idx[0] = ihi[0];
+      const std::uint64_t last = key_of(idx);
+      auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(first, CellId(0)));
+      for (; it != grid.end() && it->first <= last; ++it) {
+        const CellId o = it->second;
+        if (o == c) continue;
+        const double *x = &ordered[std::size_t(it - grid.begin()) * Dim];
+        bool inside = true;
+        for (int d = 0; d < Dim && inside; ++d) // outside the cell's box: not inside it
+          inside = x[d] >= blo[d] && x[d] <= bhi[d];
+        if (inside && inv_state == 0)
+          inv_state = make_inverse() ? 1 : -1;
+        inside = inside && inv_state == 1; // nothing is inside a singular cell
+        double rest = 1;
+        for (int j = 0; j < Dim && inside; ++j) {
+          double lambda = 0;
+          for (int e = 0; e < Dim; ++e)
+            lambda += inv[j * Dim + e] * (x[e] - pts[e]);
+          rest -= lambda;
+          inside = lambda > 1e-9;
+        }
+        if (inside && rest > 1e-9)
+          return "cells " + std::to_string(c) + " and " + std::to_string(o) +
+                 " overlap (the centroid of cell " + std::to_string(o) + " lies inside cell " +
+                 std::to_string(c) + ")";
+      }
+      int d = 1;
+      while (d < Dim && ++idx[d] > ihi[d]) idx[d] = ilo[d], ++d;
+      if (d == Dim) break;
+    }
+  }
+  return {};
+}
+
+// Local injectivity (the angle condition): around every codimension-2 face
+// F (a vertex in 2D, an edge in 3D, a triangle in 4D) the dihedral angles at
+// F of the cells containing it sum to 2π when F is interior, and to the
+// interior angle of the boundary at F when F lies in exactly two boundary
+// facets. Everything happens in the plane normal to F: each cell is a wedge
+// between the projections u_a, u_b of its two vertices off F, of angle in
+// (0, π). Once every interior facet has its two cells on opposite sides
+// (facet_pass), consecutive wedges turn the same way, so the sum exceeds the
+// expected value by a whole number of turns: 2π·k, k >= 0, and k > 0 exactly
+// when the cells fold over each other there. Hence the threshold π: exact
+// in exact arithmetic and blind to rounding, even in accepted slivers.
+// A face in more boundary facets (a pinch) has several fans of cells, each
+// checked against the boundary angle between its two end facets, and
+// together they must not exceed one turn.
+struct AngleFinding {
+  double sum = 0, expected = 0;
+  int cells = 0;
+  bool boundary = false;
+};
+
+template <int Dim> class StarAngles {
+public:
+  explicit StarAngles(const Mesh &mesh) : mesh_(mesh) {}
+
+  // face: Dim - 1 vertex ids; extras[2 i], extras[2 i + 1]: the other two
+  // vertices of cell i. True when the star of the face is tangled.
+  bool tangled(const VertexId *face, const VertexId *extras, int n, AngleFinding &out) {
+    constexpr int K = Dim - 1;
+    const double *f0 = mesh_.point(face[0]);
+    int nb = 0; // orthonormal basis of the span of F - f0
+    for (int i = 1; i < K; ++i) {
+      double e[Dim];
+      for (int d = 0; d < Dim; ++d)
+        e[d] = mesh_.point(face[i])[d] - f0[d];
+      for (int j = 0; j < nb; ++j) {
+        const double s = dot(e, basis_[j]);
+        for (int d = 0; d < Dim; ++d)
+          e[d] -= s * basis_[j][d];
+      }
+      const double len = std::sqrt(dot(e, e));
+      if (!(len > 0))
+        return false;
+      for (int d = 0; d < Dim; ++d)
+        basis_[nb][d] = e[d] / len;
+      ++nb;
+    }
+    angle_.resize(n);
+    double total = 0;
+    for (int i = 0; i < n; ++i) {
+      double ua[Dim], ub[Dim];
+      project(f0, nb, extras[2 * i], ua);
+      project(f0, nb, extras[2 * i + 1], ub);
+      angle_[i] = angle(ua, ub);
+      total += angle_[i];
+    }
+    // The link of F: the vertices off F, joined by the cells. Each has one
+    // or two cells (facet_pass), so the link is paths (their ends: boundary
+    // facets) and cycles. entry_: (vertex, cell) sorted by vertex.
+    entry_.clear();
+    for (int i = 0; i < n; ++i) {
+      entry_.push_back({extras[2 * i], i});
+      entry_.push_back({extras[2 * i + 1], i});
+    }
+    std::sort(entry_.begin(), entry_.end());
+    auto cells_of = [&](VertexId v) {
+      auto first = std::lower_bound(entry_.begin(), entry_.end(), std::make_pair(v, 0));
+      auto last = first;
+      while (last != entry_.end() && last->first == v)
+        ++last;
+      return std::make_pair(first, last);
+    };
+    auto other = [&](int cell, VertexId v) {
+      return extras[2 * cell] == v ? extras[2 * cell + 1] : extras[2 * cell];
+    };
+    constexpr double kTwoPi = 2 * M_PI;
+    out.cells = n;
+    seen_.assign(n, 0);
+    fans_.clear();
+    int paths = 0;
+    for (std::size_t e = 0; e < entry_.size();) {
+      auto [first, last] = cells_of(entry_[e].first);
+      e = std::size_t(last - entry_.begin());
+      if (last - first != 1 || seen_[first->second])
+        continue;
+      // A path from boundary facet F + p to boundary facet F + q.
+      const VertexId p = first->first;
+      int cell = first->second;
+      const VertexId w = other(cell, p);
+      VertexId at = p;
+      double sum = 0;
+      int cells = 0;
+      for (;;) {
+        seen_[cell] = 1;
+        sum += angle_[cell];
+        ++cells;
+        at = other(cell, at);
+        auto [f2, l2] = cells_of(at);
+        if (l2 - f2 != 2)
+          break;
+        cell = f2->second == cell ? (f2 + 1)->second : f2->second;
+      }
+      ++paths;
+      fans_.push_back({p, w, sum});
+      out.sum = sum;
+      out.cells = cells;
+      out.boundary = true;
+      if (!boundary_angle_fits(f0, nb, p, w, at, sum, out.expected))
+        return true;
+    }
+    double cycles = 0;
+    int in_cycles = 0;
+    for (int i = 0; i < n; ++i)
+      if (!seen_[i])
+        cycles += angle_[i], ++in_cycles;
+    out.boundary = false;
+    out.expected = kTwoPi;
+    if (in_cycles > 0 && (paths > 0 || std::abs(cycles - kTwoPi) > M_PI)) {
+      out.sum = total;
+      out.cells = n;
+      return true; // more than one turn, or a turn and boundary fans besides
+    }
+    // Fans of a pinched face must not overlap one another: their angular
+    // intervals in one frame (e1, e2) of the normal plane, sorted by start,
+    // each end before the next start (within 1e-6 of a turn).
+    if (paths > 1) {
+      out.sum = total;
+      out.cells = n;
+      if (total > kTwoPi * (1 + 1e-6))
+        return true;
+      double e1[Dim], e2[Dim] = {}, u[Dim];
+      project(f0, nb, fans_[0].p, e1);
+      const double l1 = std::sqrt(dot(e1, e1));
+      if (!(l1 > 0))
+        return false;
+      for (int d = 0; d < Dim; ++d)
+        e1[d] /= l1;
+      double best = 0;
+      for (const Fan &f : fans_) { // e2: the most normal of the fans' first cells
+        project(f0, nb, f.w, u);
+        const double s = dot(u, e1);
+        for (int d = 0; d < Dim; ++d)
+          u[d] -= s * e1[d];
+        const double l = std::sqrt(dot(u, u));
+        if (l > best) {
+          best = l;
+          for (int d = 0; d < Dim; ++d)
+            e2[d] = u[d] / l;
+        }
+      }
+      if (!(best > 0))
+        return false;
+      auto direction = [&](VertexId v) {
+        project(f0, nb, v, u);
+        const double a = std::atan2(dot(u, e2), dot(u, e1));
+        return a < 0 ? a + kTwoPi : a;
+      };
+      intervals_.clear();
+      for (const Fan &f : fans_) {
+        const double a = direction(f.p), b = direction(f.w);
+        double turn = b - a; // from p towards w: counter-clockwise in (e1, e2)?
+        if (turn < -M_PI)
+          turn += kTwoPi;
+        else if (turn > M_PI)
+          turn -= kTwoPi;
+        double lo = turn >= 0 ? a : a - f.sum;
+        if (lo < 0)
+          lo += kTwoPi;
+        intervals_.push_back({lo, lo + f.sum});
+      }
+      std::sort(intervals_.begin(), intervals_.end());
+      const double tol = 1e-6 * kTwoPi;
+      for (std::size_t i = 0; i < intervals_.size(); ++i) {
+        const double next = i + 1 < intervals_.size() ? intervals_[i + 1].first
+                                                      : intervals_[0].first + kTwoPi;
+        if (intervals_[i].second > next + tol) {
+          out.expected = -1; // fans overlapping
+          return true;
+        }
+      }
+    }
+    return false;
+  }
+
+private:
+  // Whether the angles of a fan of cells from boundary facet F + p to F + q,
+  // summing to `sum`, fill the interior angle between them: from ray p to
+  // ray q, turning towards w (the other vertex of p's cell), in [0, 2π).
+  bool boundary_angle_fits(const double *f0, int nb, VertexId p, VertexId w, VertexId q,
+                           double sum, double &expected) const {
+    constexpr double kTwoPi = 2 * M_PI;
+    double up[Dim], uq[Dim], uw[Dim];
+    project(f0, nb, p, up);
+    project(f0, nb, q, uq);
+    project(f0, nb, w, uw);
+    // e1 = up / |up|, e2 = the part of uw normal to e1, normalized.
+    const double lp = std::sqrt(dot(up, up));
+    const double sw = dot(uw, up) / (lp * lp);
+    for (int d = 0; d < Dim; ++d)
+      uw[d] -= sw * up[d];
+    const double lw = std::sqrt(dot(uw, uw));
+    expected = sum;
+    if (!(lp > 0) || !(lw > 0))
+      return true;
+    const double x = dot(uq, up) / lp, y = dot(uq, uw) / lw;
+    const double a = std::atan2(y, x); // in (-π, π]
+    expected = a >= 0 ? a : kTwoPi + a;
+    if (std::abs(sum - expected) <= M_PI)
+      return true;
+    // Rays p and q nearly aligned (a needle-like boundary): which side q is
+    // on is below rounding; then 0 and 2π are both plausible.
+    const double lq = std::sqrt(dot(uq, uq));
+    if (std::abs(y) <= 1e-8 * lq && x > 0) {
+      const double alt = expected < M_PI ? expected + kTwoPi : expected - kTwoPi;
+      if (std::abs(sum - alt) <= M_PI)
+        return true;
+    }
+    return false;
+  }
+
+  static double dot(const double *a, const double *b) {
+    double s = 0;
+    for (int d = 0; d < Dim; ++d)
+      s += a[d] * b[d];
+    return s;
+  }
+  void project(const double *f0, int nb, VertexId v, double *u) const {
+    const double *x = mesh_.point(v);
+    for (int d = 0; d < Dim; ++d)
+      u[d] = x[d] - f0[d];
+    for (int j = 0; j < nb; ++j) {
+      const double s = dot(u, basis_[j]);
+      for (int d = 0; d < Dim; ++d)
+        u[d] -= s * basis_[j][d];
+    }
+  }
+  // Angle between u and v, from the part of u normal to v (no cancellation
+  // for small angles).
+  static double angle(const double *u, const double *v) {
+    const double vv = dot(v, v), uv = dot(u, v);
+    double w2 = 0;
+    for (int d = 0; d < Dim; ++d) {
+      const double r = u[d] - uv / vv * v[d];
+      w2 += r * r;
+    }
+    return std::atan2(std::sqrt(w2 * vv), uv);
+  }
+
+  const Mesh &mesh_;
+  double basis_[Dim > 2 ? Dim - 2 : 1][Dim];
+  std::vector<double> angle_;
+  std::vector<std::pair<VertexId, int>> entry_;
+  std::vector<char> seen_;
+  struct Fan {
+    VertexId p, w; // first end; the other vertex of its cell
+    double sum;
+  };
+  std::vector<Fan> fans_;
+  std::vector<std::pair<double, double>> intervals_;
+};
+
+// e.g. "tangled: the 7 cells around edge (3, 9) have dihedral angles summing
+// to 720 degrees, expected 360 (a full turn)"
+std::string angle_message(const std::string &face, const AngleFinding &f, int dim) {
+  char buf[200];
+  if (f.expected < 0) {
+    std::snprintf(buf, sizeof buf,
+                  " form fans (a pinch) that overlap; their %sangles sum to %.6g degrees",
+                  dim == 2 ? "" : "dihedral ", f.sum * 180 / M_PI);
+    return "tangled: the " + std::to_string(f.cells) + " cells around " + face + buf;
+  }
+  std::snprintf(buf, sizeof buf, " have %sangles summing to %.6g degrees, expected %.6g (%s)",
+                dim == 2 ? "" : "dihedral ", f.sum * 180 / M_PI, f.expected * 180 / M_PI,
+                f.boundary ? "the interior angle of the boundary there" : "a full turn");
+  return "tangled: the " + std::to_string(f.cells) + " cells around " + face + buf;
+}
+
+template <int Dim> std::string find_fold(const Mesh &mesh) {
+  constexpr int N = Dim + 1;
+  StarAngles<Dim> star(mesh);
+  AngleFinding f;
+  std::vector<VertexId> extras;
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  if constexpr (Dim == 2) {
+    // The faces are the vertices: cells by vertex (counting sort).
+    std::vector<std::size_t> start(nv + 1, 0);
+    for (VertexId v : mesh.cells)
+      ++start[v + 1];
+    for (std::size_t v = 1; v <= nv; ++v)
+      start[v] += start[v - 1];
+    std::vector<VertexId> pairs(2 * mesh.cells.size());
+    std::vector<std::size_t> cursor(start.begin(), start.end() - 1);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const VertexId *cell = mesh.cell(CellId(c));
+      for (int i = 0; i < N; ++i) {
+        const std::size_t at = 2 * cursor[cell[i]]++;
+        pairs[at] = cell[(i + 1) % N];
+        pairs[at + 1] = cell[(i + 2) % N];
+      }
+    }
+    for (std::size_t v = 0; v < nv; ++v) {
+      const int n = int(start[v + 1] - start[v]);
+      const VertexId face = VertexId(v);
+      if (n > 0 && star.tangled(&face, &pairs[2 * start[v]], n, f))
+        return angle_message("vertex " + std::to_string(v), f, 2);
+    }
+    return {};
+  } else {
+    static constexpr auto subsets = combinations<N, Dim - 1>();
+    constexpr int M = int(subsets.size());
+    std::string found;
+    for_each_subsimplex<Dim, Dim - 1>(
+        mesh, [&](const std::array<VertexId, Dim - 1> &key, const std::uint32_t *refs, int count) {
+          if (!found.empty())
+            return;
+          extras.clear();
+          for (int i = 0; i < count; ++i) {
+            const VertexId *cell = mesh.cell(CellId(refs[i] / M));
+            const auto &in = subsets[refs[i] % M];
+            for (int k = 0; k < N; ++k)
+              if (std::find(in.begin(), in.end(), k) == in.end())
+                extras.push_back(cell[k]);
+          }
+          if (star.tangled(key.data(), extras.data(), count, f))
+            found = angle_message((Dim == 3 ? "edge " : "triangle ") + id_list(key), f, Dim);
+        });
+    return found;
+  }
+}
+
+
+bool relative_change(double before, double after) {
+  const double scale = std::max(std::abs(before), std::abs(after));
+  return std::abs(after - before) > 1e-9 * scale;
+}
+
+} // namespace
+
+Invariants measure_invariants(const Mesh &mesh, bool euler) {
+  if (mesh.num_cells() == 0)
+    return {};
+  return dispatch(mesh.dim, [&]<int D>() {
+    Invariants inv;
+    std::size_t bad;
+    double bad_volume = 0;
+    inv.volume = cell_pass<D>(mesh, bad, bad_volume);
+    const FacetReport fr = facet_pass<D>(mesh, nullptr, false);
+    inv.boundary_measure = fr.boundary_measure;
+    inv.boundary_facets = fr.boundary_facets;
+    if (euler)
+      inv.euler = euler_characteristic<D>(mesh, fr.facets);
+    return inv;
+  });
+}
+
+// "cell 7 is degenerate (volume 1e-20)", for the checks of a whole mesh.
+static std::string degenerate_cell(std::size_t cell, double volume) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", volume);
+  return "cell " + std::to_string(cell) + " is degenerate (volume " + buf + ")";
+}
+
+CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
+                             const CheckOptions &options) {
+  auto fail = [](std::string what) { return CheckResult{false, std::move(what)}; };
+  if (std::string s = check_shape(mesh); !s.empty())
+    return fail(s);
+  if (std::string s = check_ids(mesh); !s.empty())
+    return fail(s);
+  return dispatch(mesh.dim, [&]<int D>() {
+    std::size_t bad;
+    double bad_volume = 0;
+    std::vector<std::int8_t> signs;
+    const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
+    if (bad != std::size_t(-1)) return fail(degenerate_cell(bad, bad_volume));
+    const FacetReport fr = facet_pass<D>(mesh, &signs, true);
+    if (!fr.nonmanifold.empty())
+      return fail(fr.nonmanifold);
+    if (!fr.overlap.empty())
+      return fail(fr.overlap);
+    // See CheckOptions: for a refined mesh the boundary measure finds every
+    // defect the search would, while each boundary facet is well above the
+    // measure's tolerance.
+    const bool measure_suffices = options.refined_from_original && original &&
+                                  fr.smallest_boundary_facet > 1e-8 * fr.boundary_measure;
+    if (!measure_suffices)
+      if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
+        return fail(s);
+    if (original) {
+      if (relative_change(original->volume, volume))
+        return fail(format("volume changed: %.10g -> %.10g (relative %.2g)", original->volume,
+                           volume,
+                           std::abs(volume - original->volume) / std::abs(original->volume)));
+      if (relative_change(original->boundary_measure, fr.boundary_measure))
+        return fail(format("boundary measure changed: %.10g -> %.10g (relative %.2g)",
+                           original->boundary_measure, fr.boundary_measure,
+                           std::abs(fr.boundary_measure - original->boundary_measure) /
+                               std::abs(original->boundary_measure)));
+      const long long chi = euler_characteristic<D>(mesh, fr.facets);
+      if (chi != original->euler)
+        return fail("Euler characteristic changed: " + std::to_string(original->euler) + " -> " +
+                    std::to_string(chi));
+    }
+    return CheckResult{};
+  });
+}
+
+CheckResult check_refined(const Mesh &mesh, const Invariants &original) {
+  auto fail = [](std::string what) { return CheckResult{false, std::move(what)}; };
+  if (std::string s = check_shape(mesh); !s.empty())
+    return fail(s);
+  if (std::string s = check_ids(mesh); !s.empty())
+    return fail(s);
+  if (mesh.num_cells() == 0)
+    return CheckResult{};
+  return dispatch(mesh.dim, [&]<int D>() {
+    std::size_t bad;
+    double bad_volume = 0;
+    std::vector<std::int8_t> signs;
+    const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
+    if (bad != std::size_t(-1)) return fail(degenerate_cell(bad, bad_volume));
+    const FacetReport fr = mesh.num_vertices() < std::size_t(kSideBit)
+                               ? facet_pass<D, true>(mesh, &signs, true)
+                               : facet_pass<D>(mesh, &signs, true);
+    if (!fr.nonmanifold.empty())
+      return fail(fr.nonmanifold);
+    if (!fr.overlap.empty())
+      return fail(fr.overlap);
+    if (relative_change(original.volume, volume))
+      return fail(format("volume changed: %.10g -> %.10g (relative %.2g)", original.volume, volume,
+                         std::abs(volume - original.volume) / std::abs(original.volume)));
+    if (relative_change(original.boundary_measure, fr.boundary_measure))
+      return fail(format("boundary measure changed: %.10g -> %.10g (relative %.2g; a hanging node "
+                         "or a face split differently from its two sides)",
+                         original.boundary_measure, fr.boundary_measure,
+                         std::abs(fr.boundary_measure - original.boundary_measure) /
+                             std::abs(original.boundary_measure)));
+    if (!(fr.smallest_boundary_facet > 1e-8 * fr.boundary_measure))
+      if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
+        return fail(s);
+    return CheckResult{};
+  });
+}
+
+void for_each_interior_facet(const Mesh &mesh,
+                             const std::function<bool(CellId, int, CellId, int)> &visit) {
+  if (mesh.num_cells() == 0)
+    return;
+  dispatch(mesh.dim, [&]<int D>() {
+    constexpr int M = D + 1;
+    bool going = true;
+    for_each_subsimplex<D, D>(mesh, [&](const std::array<VertexId, D> &, const std::uint32_t *refs,
+                                        int count) {
+      if (!going || count != 2)
+        return;
+      going = visit(CellId(refs[0] / M), opposite_of_facet<D>(int(refs[0] % M)),
+                    CellId(refs[1] / M), opposite_of_facet<D>(int(refs[1] % M)));
+    });
+  });
+}
+
+void prepare_input(Mesh &mesh, const std::string &path) {
+  if (std::string s = check_shape(mesh); !s.empty())
+    throw InputError(path, s);
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  for (std::size_t v = 0; v < nv; ++v)
+    for (int d = 0; d < mesh.dim; ++d)
+      if (!std::isfinite(mesh.point(VertexId(v))[d]))
+        throw InputError(path, "vertex " + std::to_string(v) + " has a non-finite coordinate");
+  if (std::string s = check_ids(mesh); !s.empty())
+    throw InputError(path, s);
+  const int n = mesh.cell_size();
+  for (std::size_t c = 0; c < nc; ++c) {
+    const VertexId *cell = mesh.cell(CellId(c));
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j)
+        if (cell[i] == cell[j])
+          throw InputError(path, "cell " + std::to_string(c) + " repeats vertex " +
+                                     std::to_string(cell[i]));
+  }
+  dispatch(mesh.dim, [&]<int D>() {
+    std::size_t bad;
+    double bad_volume = 0;
+    std::vector<std::int8_t> signs;
+    cell_pass<D>(mesh, bad, bad_volume, &signs);
+    if (bad != std::size_t(-1))
+      throw InputError(path, "cell " + std::to_string(bad) + " has zero volume");
+    const FacetReport fr = facet_pass<D>(mesh, &signs, true);
+    if (!fr.nonmanifold.empty()) {
+      // "facet (a, b) is shared by 3 cells" -> "non-manifold: facet (a, b) shared by 3 cells"
+      std::string s = fr.nonmanifold;
+      s.replace(s.find(" is shared"), 10, " shared");
+      throw InputError(path, "non-manifold: " + s);
+    }
+    if (!fr.overlap.empty())
+      throw InputError(path, "tangled: " + fr.overlap);
+    if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
+      throw InputError(path, "non-conforming input: " + s);
+    if (std::string s = find_overlap<D>(mesh); !s.empty())
+      throw InputError(path, "tangled: " + s);
+    if (std::string s = find_fold<D>(mesh); !s.empty())
+      throw InputError(path, s);
+    // Orient every cell positively (a negatively oriented cell is not an error).
+    for (std::size_t c = 0; c < nc; ++c)
+      if (signs[c] < 0)
+        std::swap(mesh.cell(CellId(c))[0], mesh.cell(CellId(c))[1]);
+  });
+}
+
+} // namespace bisect

@@ -1,0 +1,270 @@
+// Geometric measures of simplices and meshes (ALGORITHMS.md §7).
+//
+// Mean ratio: P. M. Knupp, "Algebraic mesh quality metrics", SIAM J. Sci.
+// Comput. 23 (2001) 193-218. Kernels are templates on the dimension; the
+// public functions dispatch once on `dim` (STYLE.md §3).
+#include "bisect/measure.hpp"
+#include "core/dimension.hpp"
+
+#include <algorithm>
+#include <array>
+#include <type_traits>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace bisect {
+namespace {
+
+constexpr double factorial(int n) {
+  return n <= 1 ? 1.0 : n * factorial(n - 1);
+}
+
+// Determinant of a Dim x Dim matrix (row-major). Closed forms for 2 and 3,
+// Gaussian elimination with partial pivoting for 4.
+template <int Dim> double determinant(std::array<double, Dim * Dim> a) {
+  if constexpr (Dim == 2) {
+    return a[0] * a[3] - a[1] * a[2];
+  } else if constexpr (Dim == 3) {
+    return a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) +
+           a[2] * (a[3] * a[7] - a[4] * a[6]);
+  } else {
+    double det = 1;
+    for (int k = 0; k < Dim; ++k) {
+      int p = k;
+      for (int i = k + 1; i < Dim; ++i)
+        if (std::abs(a[i * Dim + k]) > std::abs(a[p * Dim + k]))
+          p = i;
+      if (a[p * Dim + k] == 0)
+        return 0;
+      if (p != k) {
+        for (int j = 0; j < Dim; ++j)
+          std::swap(a[k * Dim + j], a[p * Dim + j]);
+        det = -det;
+      }
+      const double pivot = a[k * Dim + k];
+      det *= pivot;
+      for (int i = k + 1; i < Dim; ++i) {
+        const double f = a[i * Dim + k] / pivot;
+        for (int j = k + 1; j < Dim; ++j)
+          a[i * Dim + j] -= f * a[k * Dim + j];
+      }
+    }
+    return det;
+  }
+}
+
+// det A with A = [x1-x0, ..., xn-x0] (edge vectors as columns).
+template <int Dim> double edge_determinant(const double *verts) {
+  std::array<double, Dim * Dim> a;
+  for (int i = 0; i < Dim; ++i)
+    for (int j = 0; j < Dim; ++j)
+      a[i * Dim + j] = verts[(j + 1) * Dim + i] - verts[i];
+  return determinant<Dim>(a);
+}
+
+template <int Dim> double squared_distance(const double *p, const double *q) {
+  double s = 0;
+  for (int i = 0; i < Dim; ++i)
+    s += (p[i] - q[i]) * (p[i] - q[i]);
+  return s;
+}
+
+template <int Dim> double signed_volume_t(const double *verts) {
+  return edge_determinant<Dim>(verts) / factorial(Dim);
+}
+
+// With W the edge matrix of the unit equilateral simplex, W^T W = (I + 11^T)/2,
+// so (W^T W)^-1 = 2 (I - 11^T/(n+1)) and
+//   |S|_F^2 = tr(A^T A (W^T W)^-1) = 2/(n+1) * sum over all vertex pairs |xi-xj|^2,
+//   det S   = det A / det W,  det W = sqrt(n+1) / 2^(n/2).
+// This is exactly q = n |det S|^(2/n) / |S|_F^2, written so that it does not
+// depend on the vertex order (tests compare it with an explicit A W^-1).
+template <int Dim> double mean_ratio_t(const double *verts) {
+  constexpr int n = Dim;
+  double sum_sq = 0;
+  for (int i = 0; i <= n; ++i)
+    for (int j = i + 1; j <= n; ++j)
+      sum_sq += squared_distance<Dim>(verts + i * Dim, verts + j * Dim);
+  if (!(sum_sq > 0))
+    return 0;
+  const double det_w = std::sqrt(double(n + 1)) / std::pow(2.0, 0.5 * n);
+  const double r = std::abs(edge_determinant<Dim>(verts)) / det_w; // |det S|
+  double r_2n;                                                     // |det S|^(2/n)
+  if constexpr (n == 2)
+    r_2n = r;
+  else if constexpr (n == 4)
+    r_2n = std::sqrt(r);
+  else
+    r_2n = std::cbrt(r * r);
+  const double frob_sq = 2.0 / (n + 1) * sum_sq;
+  return n * r_2n / frob_sq;
+}
+
+template <int Dim> void cell_points_t(const Mesh &mesh, CellId c, double *out) {
+  const VertexId *cell = mesh.cell(c);
+  for (int k = 0; k <= Dim; ++k) {
+    const double *p = mesh.point(cell[k]);
+    for (int i = 0; i < Dim; ++i)
+      out[k * Dim + i] = p[i];
+  }
+}
+
+template <int Dim> QualitySummary quality_summary_t(const Mesh &mesh) {
+  const std::size_t nc = mesh.num_cells();
+  QualitySummary s;
+  if (nc == 0)
+    return s;
+  s.min = 1e300;
+  s.max = -1e300;
+  double sum = 0;
+  double pts[(Dim + 1) * Dim];
+  for (std::size_t c = 0; c < nc; ++c) {
+    cell_points_t<Dim>(mesh, CellId(c), pts);
+    const double q = mean_ratio_t<Dim>(pts);
+    s.min = std::min(s.min, q);
+    s.max = std::max(s.max, q);
+    sum += q;
+  }
+  s.mean = sum / double(nc);
+  return s;
+}
+
+// ---- similarity classes ----------------------------------------------------
+
+constexpr int num_edges(int dim) {
+  return dim * (dim + 1) / 2;
+}
+
+// Every permutation of the dim+1 vertices, as a map from key slot (edge (i,j),
+// i<j, in lexicographic order) to the edge index of the unpermuted simplex.
+template <int Dim> struct PermutationTable {
+  static constexpr int kEdges = num_edges(Dim);
+  std::vector<std::array<std::uint8_t, kEdges>> slots;
+  PermutationTable() {
+    std::array<int, Dim + 1> perm;
+    for (int i = 0; i <= Dim; ++i)
+      perm[i] = i;
+    int edge_index[Dim + 1][Dim + 1] = {};
+    for (int i = 0, e = 0; i <= Dim; ++i)
+      for (int j = i + 1; j <= Dim; ++j, ++e)
+        edge_index[i][j] = edge_index[j][i] = e;
+    do {
+      std::array<std::uint8_t, kEdges> s;
+      for (int i = 0, e = 0; i <= Dim; ++i)
+        for (int j = i + 1; j <= Dim; ++j, ++e)
+          s[e] = std::uint8_t(edge_index[perm[i]][perm[j]]);
+      slots.push_back(s);
+    } while (std::next_permutation(perm.begin(), perm.end()));
+  }
+};
+
+template <int Dim> const PermutationTable<Dim> &permutation_table() {
+  static const PermutationTable<Dim> table;
+  return table;
+}
+
+// Key of Dim-simplex: each squared edge length divided by their sum, rounded
+// to 1e-6 (rounding is per edge, so it commutes with permuting); then the
+// lexicographically smallest arrangement over all vertex permutations.
+template <int Dim> void similarity_key_t(const double *verts, std::int32_t *key) {
+  constexpr int E = num_edges(Dim);
+  double len[E];
+  double sum = 0;
+  for (int i = 0, e = 0; i <= Dim; ++i)
+    for (int j = i + 1; j <= Dim; ++j, ++e) {
+      len[e] = squared_distance<Dim>(verts + i * Dim, verts + j * Dim);
+      sum += len[e];
+    }
+  // Ratios of bisected simplices are rationals with power-of-two
+  // denominators; on a decimal grid they can sit exactly halfway between two
+  // steps, where rounding noise splits one class in two. An irrational grid
+  // step (1e-6 / sqrt 2) keeps every such ratio away from the halfway points.
+  constexpr double kScale = 1e6 * 1.4142135623730951;
+  std::int32_t rounded[E];
+  for (int e = 0; e < E; ++e)
+    rounded[e] = sum > 0 ? std::int32_t(std::llround(len[e] / sum * kScale)) : 0;
+  const auto &perms = permutation_table<Dim>().slots;
+  const std::array<std::uint8_t, E> *best = &perms[0];
+  for (const auto &p : perms) {
+    for (int e = 0; e < E; ++e) {
+      const std::int32_t a = rounded[p[e]], b = rounded[(*best)[e]];
+      if (a < b) {
+        best = &p;
+        break;
+      }
+      if (a > b)
+        break;
+    }
+  }
+  for (int e = 0; e < E; ++e)
+    key[e] = rounded[(*best)[e]];
+}
+
+template <int Dim> std::size_t count_similarity_classes_t(const Mesh &mesh) {
+  constexpr int E = num_edges(Dim);
+  const std::size_t nc = mesh.num_cells();
+  std::vector<std::array<std::int32_t, E>> keys(nc);
+  double pts[(Dim + 1) * Dim];
+  for (std::size_t c = 0; c < nc; ++c) {
+    cell_points_t<Dim>(mesh, CellId(c), pts);
+    similarity_key_t<Dim>(pts, keys[c].data());
+  }
+  std::sort(keys.begin(), keys.end());
+  return std::size_t(std::unique(keys.begin(), keys.end()) - keys.begin());
+}
+
+
+
+} // namespace
+
+double determinant(const double *a, int n) {
+  auto run = [&](auto dim) {
+    constexpr int D = decltype(dim)::value;
+    std::array<double, D * D> m;
+    std::copy(a, a + D * D, m.begin());
+    return determinant<D>(m);
+  };
+  switch (n) {
+  case 1: return a[0];
+  case 2: return run(std::integral_constant<int, 2>{});
+  case 3: return run(std::integral_constant<int, 3>{});
+  case 4: return run(std::integral_constant<int, 4>{});
+  }
+  return 0;
+}
+
+double signed_volume(const double *verts, int dim) {
+  return dispatch(dim, [&]<int D>() { return signed_volume_t<D>(verts); });
+}
+
+double mean_ratio(const double *verts, int dim) {
+  return dispatch(dim, [&]<int D>() { return mean_ratio_t<D>(verts); });
+}
+
+void cell_points(const Mesh &mesh, CellId c, double *out) {
+  dispatch(mesh.dim, [&]<int D>() { cell_points_t<D>(mesh, c, out); });
+}
+
+QualitySummary quality_summary(const Mesh &mesh) {
+  if (mesh.num_cells() == 0)
+    return {};
+  return dispatch(mesh.dim, [&]<int D>() { return quality_summary_t<D>(mesh); });
+}
+
+std::vector<long long> similarity_key(const double *verts, int dim) {
+  return dispatch(dim, [&]<int D>() {
+    std::int32_t key[num_edges(D)];
+    similarity_key_t<D>(verts, key);
+    return std::vector<long long>(key, key + num_edges(D));
+  });
+}
+
+std::size_t count_similarity_classes(const Mesh &mesh) {
+  if (mesh.num_cells() == 0)
+    return 0;
+  return dispatch(mesh.dim, [&]<int D>() { return count_similarity_classes_t<D>(mesh); });
+}
+
+} // namespace bisect
