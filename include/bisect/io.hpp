@@ -40,6 +40,17 @@ void write_mesh_file(const std::string &file, const std::string &name, const Mes
 // (.msh holds no 4D mesh; dim 0: not known yet).
 void check_output_format(const std::string &name, int dim, const std::string &format = {});
 
+// Reads `path` ready to refine: validated (see prepare_input in check.hpp;
+// InputError naming the file), every cell positively oriented, and the
+// bisection state restored when the file carries one (then mesh.marked();
+// otherwise the mesh is unmarked: see ensure_marked in mark.hpp).
+Mesh load_mesh(const std::string &path);
+
+// Writes `mesh` with its bisection state (the bisect:* cell arrays, so that
+// refining the file continues the same sequence) through a temporary file
+// renamed when complete. The mesh is the same when it returns.
+void save_mesh(const std::string &path, Mesh &mesh, const WriteOptions &options = {});
+
 // Format-specific entry points (used by read_mesh/write_mesh and the tests).
 Mesh read_msh(const std::string &path);
 void write_msh(const std::string &path, const Mesh &mesh);

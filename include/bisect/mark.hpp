@@ -54,6 +54,9 @@ void opposite_children(const EdgeOrder &order, const VertexId *x, int n, int t, 
 //   index/longest: 2D (alpha, gamma, beta)_2; 3D planar tets (a, c, b, d)_2
 //                  and A/M/O tets Opposite; 4D every cell Opposite (Stage 1).
 void mark_mesh(Mesh &mesh, Marking marking);
+// Marks an unmarked mesh with `marking` and returns true; leaves a marked one
+// (e.g. with the state load_mesh restored) as it is and returns false.
+bool ensure_marked(Mesh &mesh, Marking marking = Marking::Index);
 
 // The Arnold type of a 3D tet under the order (for tests and `bisect quality`).
 enum class TetType { Planar, Adjacent, Mixed, Opposite };

@@ -7,6 +7,7 @@
 
 #include "bisect/mesh.hpp"
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,5 +38,9 @@ std::unique_ptr<Region> read_region(const std::string &path, int dim);
 
 // The cells whose closed simplex touches the region, then region.filter().
 std::vector<CellId> select_cells(const Mesh &mesh, const Region &region);
+
+// select_cells as a selector for run_iterations (driver.hpp); `region` must
+// outlive it.
+std::function<std::vector<CellId>(const Mesh &)> region_selector(const Region &region);
 
 } // namespace bisect

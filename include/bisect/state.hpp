@@ -28,5 +28,8 @@ void encode_state(Mesh &mesh);
 // permutation, edge ranks), or a state that is inconsistent (see
 // check_state_consistency).
 bool decode_state(Mesh &mesh, const std::string &path);
+// After writing an encoded mesh: restores the tuples encode_state reordered
+// and removes the bisect:* arrays, so the mesh is as before encode_state.
+void strip_state(Mesh &mesh);
 
 } // namespace bisect

@@ -225,6 +225,12 @@ void force_type(Mesh &mesh, const std::string &type) {
                               "; the types that do: " + list);
 }
 
+bool ensure_marked(Mesh &mesh, Marking marking) {
+  if (mesh.marked()) return false;
+  mark_mesh(mesh, marking);
+  return true;
+}
+
 void mark_mesh(Mesh &mesh, Marking marking) {
   const int n = mesh.dim, nv = n + 1;
   const std::size_t nc = mesh.num_cells();

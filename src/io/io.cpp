@@ -2,6 +2,9 @@
 // write-to-temporary-then-rename rule for output (STYLE.md §6).
 #include "bisect/io.hpp"
 
+#include "bisect/check.hpp"
+#include "bisect/state.hpp"
+
 #include "bisect/output.hpp"
 
 #include <algorithm>
@@ -136,6 +139,28 @@ void check_output_format(const std::string &name, int dim, const std::string &fo
   const Format format = format_named(name, format_name);
   if (format == Format::Msh && dim == 4)
     throw InputError(name, "a .msh file cannot hold a 4D mesh; write .vtu");
+}
+
+Mesh load_mesh(const std::string &path) {
+  Mesh mesh = read_mesh(path);
+  prepare_input(mesh, path);
+  decode_state(mesh, path);
+  return mesh;
+}
+
+void save_mesh(const std::string &path, Mesh &mesh, const WriteOptions &options) {
+  if (!mesh.marked()) {
+    write_mesh(path, mesh, options);
+    return;
+  }
+  encode_state(mesh);
+  try {
+    write_mesh(path, mesh, options);
+  } catch (...) {
+    strip_state(mesh);
+    throw;
+  }
+  strip_state(mesh);
 }
 
 void write_mesh(const std::string &path, const Mesh &mesh, const WriteOptions &options) {

@@ -68,6 +68,20 @@ void encode_state(Mesh &mesh) {
   }
 }
 
+void strip_state(Mesh &mesh) {
+  const int order = find_array(mesh.cell_data, kOrderArray);
+  if (order >= 0) {
+    const DataArray &a = mesh.cell_data[std::size_t(order)];
+    const std::size_t k = std::size_t(a.components);
+    for (std::size_t c = 0; c < mesh.num_cells(); ++c)
+      if (a.values[c * k] == 1) std::swap(mesh.cell(CellId(c))[0], mesh.cell(CellId(c))[1]);
+  }
+  std::erase_if(mesh.cell_data, [](const DataArray &a) {
+    return a.name == kOrderArray || a.name == kStageArray || a.name == kTagArray ||
+           a.name == kMarkingArray || a.name == kEdgeRankArray;
+  });
+}
+
 bool decode_state(Mesh &mesh, const std::string &path) {
   int io = find_array(mesh.cell_data, kOrderArray), is = find_array(mesh.cell_data, kStageArray),
       it = find_array(mesh.cell_data, kTagArray), im = find_array(mesh.cell_data, kMarkingArray);

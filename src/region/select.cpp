@@ -32,4 +32,8 @@ std::vector<CellId> select_cells(const Mesh &mesh, const Region &region) {
   return out;
 }
 
+std::function<std::vector<CellId>(const Mesh &)> region_selector(const Region &region) {
+  return [&region](const Mesh &mesh) { return select_cells(mesh, region); };
+}
+
 } // namespace bisect

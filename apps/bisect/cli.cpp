@@ -1,0 +1,180 @@
+// Helpers the commands share (cli.hpp).
+#include "cli.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <fcntl.h>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+#include <sys/resource.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace bisect::cli {
+
+const char *const kExitCodesHelp =
+    "Exit codes: 0 success; 1 usage or input error (one line on stderr names the file and the "
+    "problem), or a system failure (disk full, permission); 2 an internal check failed; 3 a limit "
+    "(--max-elements, --max-memory, 32-bit ids, the precision limit) was reached, the output is "
+    "still written and conforming; 4 out of memory (no output written); 130 interrupted (no output "
+    "written).";
+
+void add_common_flags(CLI::App *cmd, CommonFlags &flags) {
+  cmd->add_flag("--quiet,-q", flags.quiet, "No progress or \"wrote\" lines on stderr");
+  cmd->add_flag("--json", flags.json, "Print a JSON summary on stdout");
+}
+
+void print_json(const nlohmann::json &j) { std::cout << j.dump() << std::endl; }
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::string with_commas(std::size_t n) {
+  const std::string digits = std::to_string(n);
+  std::string s;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) s += ',';
+    s += digits[i];
+  }
+  return s;
+}
+
+// Peak resident memory of this process so far, in bytes.
+double peak_rss_bytes() {
+  struct rusage u {};
+  ::getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) * 1024.0;
+}
+
+// Reads, validates and marks (or restores the marks of) an input mesh.
+Mesh load_for_refinement(const std::string &path, std::optional<Marking> requested, bool quiet) {
+  Mesh mesh = load_mesh(path);
+  if (mesh.marked()) {
+    if (requested && *requested != mesh.marking && !quiet)
+      std::cerr << "bisect: " << path << " carries bisection state with --marking "
+                << marking_name(mesh.marking) << "; continuing it (--marking "
+                << marking_name(*requested) << " ignored)\n";
+  } else {
+    mark_mesh(mesh, requested.value_or(Marking::Index));
+  }
+  return mesh;
+}
+
+// Writes `text` into `file` (an OutputSet's file for output `name`).
+void write_text_file(const std::string &file, const std::string &name, const std::string &text) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) throw InputError(name, "cannot write: " + write_failure(errno));
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int err = n < 0 ? errno : EIO;
+      ::close(fd);
+      throw InputError(name, "cannot write: " + write_failure(err));
+    }
+    done += std::size_t(n);
+  }
+  if (::close(fd) != 0) throw InputError(name, "cannot write: " + write_failure(errno));
+}
+
+// One output file, checked before any work (see output.hpp for the rules).
+void check_extension(const std::string &out) {
+  const std::string ext = [&] {
+    std::string e = fs::path(out).extension().string();
+    for (char &c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return e;
+  }();
+  if (ext != ".vtu" && ext != ".msh") throw UsageError(out + ": output must end in .vtu or .msh");
+}
+
+// Writes `mesh` with its bisection state into output `h` of `outputs`.
+void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions &options) {
+  encode_state(mesh);
+  write_mesh_file(outputs.file(h), outputs.name(h), mesh, options);
+}
+
+// "<output stem>.t<value>.vtu" beside the output.
+std::string slice_path(const std::string &output, const char *axis, double value) {
+  fs::path p(output);
+  std::ostringstream name;
+  name << p.stem().string() << "." << axis << value << ".vtu";
+  return (p.parent_path() / name.str()).string();
+}
+
+// Writes the section of `mesh` at coordinate `axis` = `value` into output
+// `h`; returns the line to print once the outputs are committed.
+std::string write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h) {
+  Mesh s = slice_mesh(mesh, axis, value);
+  // The 4D bisection state means nothing on a 3D section.
+  std::erase_if(s.cell_data, [](const DataArray &d) { return d.name.rfind("bisect:", 0) == 0; });
+  if (s.num_cells() == 0)
+    throw InputError(outputs.name(h), std::string("the section ") +
+                                          (axis == mesh.dim - 1 ? 't' : "xyz"[axis]) + " = " +
+                                          std::to_string(value) + " is empty (it misses the mesh)");
+  write_mesh_file(outputs.file(h), outputs.name(h), s);
+  std::ostringstream line;
+  line << "bisect: wrote " << outputs.name(h) << " (" << with_commas(s.num_cells())
+       << (s.dim == 3 ? " tetrahedra" : " triangles") << ": the section "
+       << (axis == mesh.dim - 1 ? 't' : "xyz"[axis]) << " = " << value << ")\n";
+  return line.str();
+}
+
+// "0,0.5,1" or "start:stop:count" (count slabs, count + 1 slices).
+std::vector<double> parse_slices(const std::string &text) {
+  auto number = [&](const std::string &t) {
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(t, &used);
+    } catch (const std::exception &) {
+      used = 0;
+    }
+    if (used != t.size() || t.empty() || !std::isfinite(v))
+      throw UsageError("--slices: \"" + t + "\" is not a number (expected T0,T1,... or START:STOP:COUNT)");
+    return v;
+  };
+  std::vector<double> out;
+  if (text.find(':') != std::string::npos) {
+    std::vector<std::string> parts;
+    std::stringstream in(text);
+    for (std::string p; std::getline(in, p, ':');) parts.push_back(p);
+    if (parts.size() != 3) throw UsageError("--slices: expected START:STOP:COUNT, got \"" + text + "\"");
+    double a = number(parts[0]), b = number(parts[1]), n = number(parts[2]);
+    if (!(n >= 1 && n <= 10000 && n == std::floor(n)))
+      throw UsageError("--slices: COUNT must be a whole number from 1 to 10000");
+    for (int i = 0; i <= int(n); ++i) out.push_back(a + (b - a) * i / n);
+  } else {
+    std::stringstream in(text);
+    for (std::string p; std::getline(in, p, ',');) out.push_back(number(p));
+  }
+  if (out.size() < 2) throw UsageError("--slices: need at least two slices");
+  for (std::size_t i = 1; i < out.size(); ++i)
+    if (!(out[i] > out[i - 1])) throw UsageError("--slices: values must increase");
+  return out;
+}
+
+// Writes a made mesh to `out` (an OutputSet of one; `inputs` may not be it).
+int write_generated(Mesh mesh, const std::string &out, bool force, const CommonFlags &flags,
+                    std::vector<std::string> inputs) {
+  check_extension(out);
+  OutputSet outputs(std::move(inputs), force);
+  const int h = outputs.add(out);
+  check_output_format(out, mesh.dim);
+  if (mesh.marked()) encode_state(mesh);
+  write_mesh_file(outputs.file(h), out, mesh);
+  outputs.commit();
+  if (flags.json)
+    print_json({{"output", out}, {"dim", mesh.dim}, {"cells", mesh.num_cells()},
+                {"vertices", mesh.num_vertices()}});
+  if (!flags.quiet)
+    std::cerr << "bisect: wrote " << out << " (" << mesh.num_cells() << " cells, "
+              << mesh.num_vertices() << " vertices)\n";
+  return kExitOk;
+}
+
+} // namespace bisect::cli

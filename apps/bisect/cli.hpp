@@ -1,0 +1,83 @@
+// What the commands of the `bisect` command line share: exit codes, output
+// helpers, progress printing. Each command is one file (refine.cpp, info.cpp,
+// ...) that parses its options, calls the library and prints; main.cpp maps
+// errors to exit codes in one place.
+#pragma once
+
+#include "bisect/bisect.hpp"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace bisect::cli {
+
+inline constexpr int kExitOk = 0, kExitInput = 1, kExitCheck = 2, kExitLimit = 3,
+                     kExitMemory = 4, kExitInterrupted = 130;
+
+extern const char *const kExitCodesHelp;
+
+// A subcommand: its CLI11 parser and what runs when it was given.
+struct Command {
+  CLI::App *app = nullptr;
+  std::function<int()> run;
+};
+
+Command add_refine(CLI::App &app);
+Command add_info(CLI::App &app);
+Command add_check(CLI::App &app);
+Command add_quality(CLI::App &app);
+Command add_colour(CLI::App &app);
+Command add_extrude(CLI::App &app);
+Command add_slice(CLI::App &app);
+std::vector<Command> add_generate(CLI::App &app);
+
+// Options every command has: -q (no progress or "wrote" lines on stderr) and
+// --json (a summary on stdout instead of the text report).
+struct CommonFlags {
+  bool quiet = false, json = false;
+};
+void add_common_flags(CLI::App *cmd, CommonFlags &flags);
+
+double seconds_since(std::chrono::steady_clock::time_point t0);
+std::string with_commas(std::size_t n);
+double peak_rss_bytes();
+
+// Reads, validates and marks (or restores the marks of) an input mesh; says
+// so when a file's state overrides --marking.
+Mesh load_for_refinement(const std::string &path, std::optional<Marking> requested, bool quiet);
+
+// Writes `text` into `file` (an OutputSet's file for output `name`).
+void write_text_file(const std::string &file, const std::string &name, const std::string &text);
+
+// Refuses an output name that ends in neither .vtu nor .msh (any case).
+void check_extension(const std::string &out);
+
+// Writes `mesh` with its bisection state into output `h` of `outputs`.
+void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions &options = {});
+
+// "<output stem>.<axis><value>.vtu" beside the output.
+std::string slice_path(const std::string &output, const char *axis, double value);
+
+// Writes the section of `mesh` at coordinate `axis` = `value` into output
+// `h`; returns the line to print once the outputs are committed. An empty
+// section is an InputError naming the output.
+std::string write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h);
+
+// "0,0.5,1" or "start:stop:count" (count slabs, count + 1 slices).
+std::vector<double> parse_slices(const std::string &text);
+
+// Writes a made mesh to `out` (an OutputSet of one; `inputs` may not be it)
+// and prints "wrote" unless quiet; with json, a summary on stdout.
+int write_generated(Mesh mesh, const std::string &out, bool force, const CommonFlags &flags,
+                    std::vector<std::string> inputs = {});
+
+// Prints `j` on stdout as one line.
+void print_json(const nlohmann::json &j);
+
+} // namespace bisect::cli

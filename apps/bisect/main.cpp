@@ -1,0 +1,127 @@
+// The `bisect` command line. Each command is one file of apps/bisect/; this
+// one parses, dispatches, and maps errors to exit codes in one place.
+#include "cli.hpp"
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <iostream>
+#include <new>
+#include <unistd.h>
+
+using namespace bisect;
+using namespace bisect::cli;
+
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+
+// SIGINT, SIGTERM, SIGHUP: before the outputs are committed nothing of the
+// run's result exists but temporary files, so they are removed and the
+// process ends at once, whatever it was doing (reading, refining, writing).
+// After the commit the run is complete and the signal is only noted.
+extern "C" void on_signal(int) {
+  if (outputs_committed()) {
+    g_interrupted = true;
+    return;
+  }
+  remove_pending_outputs();
+  static const char msg[] = "bisect: interrupted; no output written\n";
+  (void)!::write(STDERR_FILENO, msg, sizeof msg - 1);
+  ::_exit(kExitInterrupted);
+}
+
+void install_signal_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
+  // A file size limit or a reader that went away makes write() fail with
+  // EFBIG or EPIPE, reported as such, instead of killing the process.
+  std::signal(SIGXFSZ, SIG_IGN);
+  std::signal(SIGPIPE, SIG_IGN);
+}
+
+// An error message as one line: control characters a hostile file put into
+// it (a newline inside an attribute) are shown escaped.
+std::string one_line(const std::string &text) {
+  std::string out;
+  for (unsigned char c : text) {
+    if (c == '\n') out += "\\n";
+    else if (c == '\r') out += "\\r";
+    else if (c < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02X", c);
+      out += buf;
+    } else out += char(c);
+  }
+  return out;
+}
+
+} // namespace
+
+int main(int argc, char **argv) {
+  install_signal_handlers();
+
+  CLI::App app{"bisect: conformal local refinement of triangle, tetrahedral and 4D simplicial "
+               "meshes by edge bisection (Maubach / Arnold-Mukherjee-Pouly marking, seeds "
+               "000-002)."};
+  app.footer(kExitCodesHelp);
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "bisect 0.1");
+
+  std::vector<Command> commands{add_refine(app), add_info(app),  add_check(app),
+                                add_quality(app), add_colour(app), add_extrude(app),
+                                add_slice(app)};
+  for (Command &c : add_generate(app)) commands.push_back(std::move(c));
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp &e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp &e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion &e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError &e) {
+    // CLI11 says "A subcommand is required" for a misspelt command.
+    std::string names;
+    bool known = false;
+    for (const CLI::App *sub : app.get_subcommands({})) {
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+      known |= argc > 1 && sub->get_name() == argv[1];
+    }
+    if (argc > 1 && argv[1][0] != '-' && !known) {
+      std::cerr << "bisect: unknown command '" << argv[1] << "' (commands: " << names << ")\n";
+      return kExitInput;
+    }
+    std::cerr << "bisect: " << e.what() << " (see bisect --help)\n";
+    return kExitInput;
+  }
+
+  try {
+    for (const Command &c : commands)
+      if (*c.app) return c.run();
+  } catch (const Error &e) {
+    switch (e.kind) {
+    case ErrorKind::Check:
+      std::cerr << "bisect: internal check failed: " << one_line(e.what()) << "\n";
+      return kExitCheck;
+    case ErrorKind::Limit:
+      std::cerr << "bisect: " << one_line(e.what()) << "\n";
+      return kExitLimit;
+    case ErrorKind::Input:
+    case ErrorKind::Usage:
+    case ErrorKind::Resource:
+      std::cerr << "bisect: " << one_line(e.what()) << "\n";
+      return kExitInput;
+    }
+  } catch (const std::bad_alloc &) {
+    std::cerr << "bisect: out of memory; no output written (try --max-elements)\n";
+    return kExitMemory;
+  } catch (const std::exception &e) {
+    std::cerr << "bisect: internal error: " << one_line(e.what()) << "\n";
+    return kExitCheck;
+  }
+  return kExitOk;
+}

@@ -1,0 +1,198 @@
+// The iteration driver (driver.hpp): what `bisect refine` and the library's
+// callers run between reading and writing.
+#include "bisect/driver.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+namespace bisect {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Memory the machine can still give, from /proc/meminfo (0 when unknown).
+double available_bytes() {
+  std::ifstream f("/proc/meminfo");
+  std::string key, unit;
+  double kb = 0;
+  while (f >> key >> kb >> unit)
+    if (key == "MemAvailable:") return kb * 1024.0;
+  return 0;
+}
+
+std::string with_commas(std::size_t n) {
+  const std::string digits = std::to_string(n);
+  std::string s;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) s += ',';
+    s += digits[i];
+  }
+  return s;
+}
+
+// The temporary cell array refine_marked tags descendants with.
+constexpr const char *kAncestorVolume = "bisect:ancestor_volume";
+
+} // namespace
+
+// The estimate: each selected cell costs about four new cells with closure,
+// and a cell costs its ids, state and arrays twice over while vectors grow.
+std::string memory_shortfall(const Mesh &mesh, std::size_t selected, double max_gib) {
+  double per_cell = 2.5 * (4.0 * (mesh.dim + 1) + 2.0) + 8.0;
+  for (const DataArray &a : mesh.cell_data) per_cell += 2.0 * 8.0 * a.components;
+  // max_gib bounds the whole mesh; otherwise what it adds must fit in the
+  // memory available now.
+  double need = per_cell * 4.0 * double(selected);
+  if (max_gib > 0) need += per_cell * double(mesh.num_cells());
+  const double avail = max_gib > 0 ? max_gib * 1073741824.0 : available_bytes();
+  if (avail <= 0 || need < 0.9 * avail) return {};
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "it would need about %.2f GiB %s, %.2f GiB %s",
+                need / 1073741824.0, max_gib > 0 ? "in all" : "more memory",
+                avail / 1073741824.0, max_gib > 0 ? "allowed by --max-memory" : "available");
+  return buf;
+}
+
+DriverResult run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
+                            const std::function<void(const IterationReport &, Mesh &)> &on_iteration) {
+  if (!mesh.marked()) throw CheckError("run_iterations: the mesh is not marked (ensure_marked)");
+  DriverResult result;
+  // The invariants every check compares with (the Euler characteristic only
+  // for the full check: it is the costly part).
+  const Invariants before = measure_invariants(mesh, options.check_every_iteration);
+  RefineLimits limits;
+  if (options.max_cells) limits.max_cells = options.max_cells;
+  limits.cancel = options.cancel;
+  result.quality = quality_summary(mesh);
+  for (int it = 1; it <= options.iterations; ++it) {
+    if (options.cancel && options.cancel->load()) {
+      result.stop = StopReason::Cancelled;
+      break;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::vector<CellId> selected = select(mesh);
+    result.select_seconds += seconds_since(t0);
+    if (std::string why = memory_shortfall(mesh, selected.size(), options.max_memory_gib);
+        !why.empty()) {
+      result.stop = StopReason::MemoryLimit;
+      result.stop_message = "stopping before iteration " + std::to_string(it) + ": " + why;
+      break;
+    }
+    IterationReport report;
+    report.iteration = it;
+    report.first_new_vertex = mesh.num_vertices();
+    const auto t_refine = std::chrono::steady_clock::now();
+    const RefineResult r = refine(mesh, selected, limits);
+    result.refine_seconds += seconds_since(t_refine);
+    if (r.cancelled) {
+      result.stop = StopReason::Cancelled;
+      break;
+    }
+    if (r.precision_reached) {
+      result.stop = StopReason::PrecisionLimit;
+      result.stop_message =
+          "stopping before iteration " + std::to_string(it) +
+          ": it would bisect an edge finer than doubles resolve (extent below 2^-40 of its "
+          "coordinates' magnitude, or below 2^-100); writing the mesh after iteration " +
+          std::to_string(it - 1);
+      break;
+    }
+    if (r.limit_reached) {
+      result.stop = StopReason::CellLimit;
+      result.stop_message = "stopping before iteration " + std::to_string(it) + ": it would pass " +
+                            (options.max_cells ? "--max-elements " + with_commas(options.max_cells)
+                                               : std::string("the 32-bit id limit")) +
+                            " (" + with_commas(mesh.num_cells()) + " cells now)";
+      break;
+    }
+    const auto t_quality = std::chrono::steady_clock::now();
+    result.quality = quality_summary(mesh);
+    result.quality_seconds += seconds_since(t_quality);
+    report.cells = mesh.num_cells();
+    report.vertices = mesh.num_vertices();
+    report.selected = r.selected;
+    report.bisections = r.bisections;
+    report.closure_passes = r.closure_passes;
+    report.quality = result.quality;
+    report.seconds = seconds_since(t0);
+    result.bisections += r.bisections;
+    result.iterations = it;
+    if (on_iteration) on_iteration(report, mesh);
+    if (options.check_every_iteration) {
+      const auto t_check = std::chrono::steady_clock::now();
+      const CheckResult c = check_conformity(mesh, &before);
+      result.check_seconds += seconds_since(t_check);
+      if (!c.ok) throw CheckError("after iteration " + std::to_string(it) + ": " + c.failure);
+    }
+    if (selected.empty()) { // the same would hold for every later iteration
+      result.stop = StopReason::NothingSelected;
+      break;
+    }
+  }
+  // The final check (--check has checked every iteration in full): whatever
+  // went wrong, the caller never gets a non-conforming mesh without an error.
+  if (options.final_check && !options.check_every_iteration) {
+    const auto t_check = std::chrono::steady_clock::now();
+    const CheckResult c = check_refined(mesh, before);
+    result.check_seconds += seconds_since(t_check);
+    if (!c.ok) throw CheckError("on the refined mesh: " + c.failure);
+  }
+  return result;
+}
+
+// Descendants are told apart by volume: bisection halves a cell's volume, so
+// a cell that descends from a marked cell of volume V by g bisections has
+// volume V / 2^g (up to rounding, far below a factor 2). The marked cells'
+// volume is a temporary cell array, inherited by their children.
+RefineResult refine_marked(Mesh &mesh, const std::vector<CellId> &marked, int depth,
+                           const RefineLimits &limits) {
+  if (depth < 1) throw UsageError("refine_marked: depth must be at least 1");
+  if (depth == 1 || marked.empty()) return refine(mesh, marked, limits);
+  if (!mesh.marked()) throw CheckError("refine_marked: the mesh is not marked");
+  auto volume = [&](CellId c) {
+    double pts[5 * 4];
+    cell_points(mesh, c, pts);
+    return std::abs(signed_volume(pts, mesh.dim));
+  };
+  // Undo needs the mesh as it was: the rounds after the first cannot be
+  // undone by refine() alone.
+  const Mesh saved = mesh;
+  mesh.cell_data.push_back({kAncestorVolume, 1, std::vector<double>(mesh.num_cells(), 0.0)});
+  std::size_t slot = mesh.cell_data.size() - 1;
+  for (CellId c : marked) mesh.cell_data[slot].values.at(c) = volume(c);
+  RefineResult total;
+  std::vector<CellId> round = marked;
+  for (int r = 0; r < depth && !round.empty(); ++r) {
+    const RefineResult step = refine(mesh, round, limits);
+    if (step.limit_reached || step.cancelled) {
+      mesh = saved;
+      RefineResult undone = step;
+      undone.selected = marked.size();
+      return undone;
+    }
+    if (r == 0) total.selected = step.selected;
+    total.bisections += step.bisections;
+    total.closure_passes += step.closure_passes + (r > 0);
+    total.kernel_seconds += step.kernel_seconds;
+    // The descendants not yet `depth` generations down.
+    round.clear();
+    slot = std::size_t(std::find_if(mesh.cell_data.begin(), mesh.cell_data.end(),
+                                    [](const DataArray &a) { return a.name == kAncestorVolume; }) -
+                       mesh.cell_data.begin());
+    const std::vector<double> &anc = mesh.cell_data[slot].values;
+    for (std::size_t c = 0; c < mesh.num_cells(); ++c) {
+      if (anc[c] <= 0) continue;
+      const double g = std::log2(anc[c] / volume(CellId(c)));
+      if (std::lround(g) < depth) round.push_back(CellId(c));
+    }
+  }
+  mesh.cell_data.erase(mesh.cell_data.begin() + std::ptrdiff_t(slot));
+  return total;
+}
+
+} // namespace bisect
