@@ -1181,7 +1181,7 @@ private:
   std::vector<Array> read_field_data(const Element &e) const {
     std::vector<Array> out;
     for (const ArraySpec &a : specs(e, "field data", "")) {
-      Array arr{a.name, a.components, a.numeric, {}};
+      Array arr{a.name, a.components, a.numeric, {}, std::string(info(a.type).name)};
       if (a.numeric) {
         std::uint64_t want = kAnyCount;
         if (a.tuples && *a.tuples <= kAnyCount / std::uint64_t(a.components))
@@ -1203,7 +1203,7 @@ private:
     if (!section)
       return out;
     for (const ArraySpec &a : specs(*section, what, piece)) {
-      Array arr{a.name, a.components, a.numeric, {}};
+      Array arr{a.name, a.components, a.numeric, {}, std::string(info(a.type).name)};
       if (a.numeric)
         arr.values = arrays_.read<double>(a, times(tuples, a.components));
       out.push_back(std::move(arr));
