@@ -126,3 +126,23 @@ def test_marking_choice_is_used_for_an_unmarked_mesh():
     mesh = pybisect.Mesh(points, cells)
     mesh.refine([0], marking="longest")
     assert mesh.marking == "longest"
+
+
+def test_refine_releases_the_gil_and_guards_the_mesh():
+    # While one thread refines (GIL released), another runs Python and finds
+    # the mesh busy instead of reading it half-refined.
+    import threading
+
+    mesh = pybisect.read(DATA / "ball.msh")
+    worker = threading.Thread(target=lambda: mesh.refine(np.arange(mesh.num_cells), depth=3))
+    seen_busy = False
+    worker.start()
+    while worker.is_alive():
+        try:
+            mesh.points  # holds the GIL: never makes the worker find the mesh busy
+        except pybisect.Error as e:
+            assert "in use" in str(e) and e.kind == "usage"
+            seen_busy = True
+    worker.join()
+    assert seen_busy
+    mesh.check(full=False)
