@@ -33,6 +33,11 @@ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DBISECT_PYTHON=ON \
 cmake --build "$build" --target pybisect -j "${JOBS:-2}"
 $SUDO cmake --install "$build" --component python
 
-# The check: the installed module, from a directory with no build tree in it.
+# The check: the installed module (not a build tree's), from another directory.
 cd /
-"$python" -c 'import pybisect, sys; print("install-python: pybisect installed:", pybisect.__file__)'
+PYTHONPATH="$dest" "$python" - "$dest" <<'PY'
+import os, sys, pybisect
+where = os.path.realpath(pybisect.__file__)
+assert where.startswith(os.path.realpath(sys.argv[1]) + os.sep), where
+print("install-python: installed", where)
+PY
