@@ -342,7 +342,10 @@ std::vector<CellId> cells_of(const py::object &marked, std::size_t nc) {
 // A region given as a dict (a JSON object), JSON text, or a path to a spec file.
 std::unique_ptr<bisect::Region> region_of(const py::object &region, int dim) {
   if (py::isinstance<py::dict>(region)) {
-    const std::string text = py::cast<std::string>(py::module_::import("json").attr("dumps")(region));
+    // numpy arrays and scalars in the dict become JSON lists and numbers.
+    const py::cpp_function to_list([](const py::object &o) { return o.attr("tolist")(); });
+    const std::string text = py::cast<std::string>(
+        py::module_::import("json").attr("dumps")(region, py::arg("default") = to_list));
     return bisect::parse_region(text, dim, "<region>");
   }
   const py::object os = py::module_::import("os");

@@ -71,3 +71,13 @@ def test_4d_has_no_meshio_form():
     points, cells = kuhn(4, 1)
     with pytest.raises(pybisect.Error, match="meshio has no cell type"):
         pybisect.Mesh(points, cells).to_meshio()
+
+
+def test_from_meshio_reads_a_2d_gmsh_file():
+    m = meshio.read(DATA / "square.msh")  # points (n, 3) with z = 0, lines and triangles
+    mesh = pybisect.from_meshio(m)
+    direct = pybisect.read(DATA / "square.msh")
+    assert mesh.dim == 2 and mesh.points.shape[1] == 2
+    assert cell_sets(mesh) == cell_sets(direct)
+    mesh.refine(region=DATA / "regions" / "box2d.json", depth=2)
+    mesh.check()

@@ -72,6 +72,14 @@ def test_region_and_mask_select_their_union():
     assert_conforming(b, 1.0)
 
 
+def test_region_dict_may_hold_numpy_values():
+    points, cells = kuhn(3, 2)
+    a, b = pybisect.Mesh(points, cells), pybisect.Mesh(points, cells)
+    a.refine(region={"type": "sphere", "center": np.full(3, 0.5), "radius": np.float64(0.3)})
+    b.refine(region=REGIONS[3])
+    assert np.array_equal(a.cells, b.cells)
+
+
 def test_region_as_json_text_and_as_file_give_the_same_mesh():
     spec = DATA / "regions" / "hemisphere.json"
     a = pybisect.read(DATA / "ball.msh")
