@@ -281,6 +281,7 @@ std::unique_ptr<PyMesh> mesh_from_arrays(const py::object &points_in, const py::
                                          std::to_string(dim) +
                                          (dim == 2 ? " (or 3 with a constant z)" : ""));
   const std::size_t nv = std::size_t(points.shape(0)), nc = std::size_t(cells.shape(0));
+  if (nc == 0) throw bisect::InputError(origin, "no cells");
   Mesh mesh;
   mesh.dim = dim;
   mesh.coords.resize(nv * dim);
@@ -396,14 +397,14 @@ py::dict refine(py::object self, const py::object &marked, const py::object &reg
   if (r.precision_reached)
     throw bisect::Error(ErrorKind::Limit, {},
                         "refine: it would bisect an edge finer than doubles resolve (extent below "
-                        "2^-40 of its coordinates' magnitude, or below 2^-100); the mesh is unchanged");
+                        "2^-40 of its coordinates' magnitude, or below 2^-100); nothing was bisected");
   if (r.limit_reached)
     throw bisect::Error(ErrorKind::Limit, {},
                         "refine: it would pass " +
                             (max_cells ? "max_cells " + std::to_string(max_cells)
                                        : std::string("the 32-bit id limit")) +
                             " (" + std::to_string(m.mesh.num_cells()) +
-                            " cells now); the mesh is unchanged");
+                            " cells now); nothing was bisected");
   py::dict out;
   out["selected"] = selected.size();
   out["bisections"] = r.bisections;
@@ -501,6 +502,8 @@ std::unique_ptr<PyMesh> from_meshio(const py::object &m) {
   }
   py::dict point_data;
   for (auto item : py::cast<py::dict>(m.attr("point_data"))) {
+    // Gmsh's node entities: meaningless once vertices are added (read() has no such array).
+    if (py::cast<std::string>(item.first) == "gmsh:dim_tags") continue;
     py::array a = np.attr("asarray")(item.second);
     const char k = a.dtype().kind();
     if (k == 'f' || k == 'i' || k == 'u' || k == 'b') point_data[item.first] = a;
@@ -663,7 +666,7 @@ PYBIND11_MODULE(pybisect, m) {
            "conformity (refine_marked). An unmarked mesh is first marked with `marking` (index, "
            "longest, sorted). One call with a region is one iteration of `bisect refine`. "
            "Returns {selected, bisections, closure_passes, cells, vertices}. Raises "
-           "pybisect.Error (kind 'limit', mesh unchanged) when it would pass max_cells, the "
+           "pybisect.Error (kind 'limit', nothing bisected) when it would pass max_cells, the "
            "32-bit ids, the memory available or the precision limit. Releases the GIL.")
       .def("check", &check, py::arg("full") = true,
            "check(full=True) -> dict\n\n"
@@ -681,6 +684,16 @@ PYBIND11_MODULE(pybisect, m) {
            "A meshio.Mesh: points (n, 3) as in the .vtu file, one triangle or tetra block "
            "(positively oriented), point and cell data with the bisect:* state arrays, so "
            "from_meshio continues the same bisection. Not for 4D meshes (meshio has no pentatope).")
+      .def(
+          "copy",
+          [](const PyMesh &p) {
+            check_idle(p);
+            auto out = std::make_unique<PyMesh>();
+            out->mesh = p.mesh;
+            out->original = p.original;
+            return out;
+          },
+          "An independent copy (same cells, state, arrays and original invariants)")
       .def("__repr__", [](const PyMesh &p) {
         return "<pybisect.Mesh " + std::to_string(p.mesh.dim) + "D, " +
                std::to_string(p.mesh.num_cells()) + " cells, " +

@@ -48,6 +48,8 @@ def test_bad_arrays():
         pybisect.Mesh(points, cells + 100)
     with pytest.raises(pybisect.Error, match="integer"):
         pybisect.Mesh(points, cells.astype(float))
+    with pytest.raises(pybisect.Error, match="no cells"):
+        pybisect.Mesh(np.zeros((0, 3)), np.zeros((0, 4), dtype=int))
     flat = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0]], dtype=float)
     with pytest.raises(pybisect.Error, match="zero volume"):
         pybisect.Mesh(flat, [[0, 1, 2, 3]])

@@ -129,6 +129,18 @@ def test_views_share_memory_and_survive_refine():
         mesh.points[0, 0] = 1.0
 
 
+def test_copy_is_independent():
+    points, cells = kuhn(2, 2)
+    mesh = pybisect.Mesh(points, cells)
+    mesh.refine([0])
+    twin = mesh.copy()
+    mesh.refine([1, 2])
+    assert twin.num_cells < mesh.num_cells and twin.marked
+    twin.refine([1, 2])
+    assert np.array_equal(twin.cells, mesh.cells)
+    twin.check()
+
+
 def test_marking_choice_is_used_for_an_unmarked_mesh():
     points, cells = kuhn(3, 1)
     mesh = pybisect.Mesh(points, cells)
