@@ -104,7 +104,9 @@ struct ViewBuffer {
 
 struct PyMesh {
   Mesh mesh;
-  bisect::Invariants original;
+  // Measured on first need (check, or before the first refine), so reading
+  // costs what `bisect refine` spends on it.
+  std::optional<bisect::Invariants> original;
   bool busy = false; // an operation with the GIL released is running
   std::weak_ptr<ViewBuffer> coords_view, cells_view;
   std::map<std::string, std::weak_ptr<ViewBuffer>> point_views, cell_views;
@@ -181,6 +183,13 @@ void check_idle(const PyMesh &m) {
   if (m.busy) throw bisect::UsageError("the mesh is in use by another thread (refine/check)");
 }
 
+// The invariants of the mesh as read or built; call before it first changes
+// (without the GIL: it walks every facet).
+const bisect::Invariants &original(PyMesh &m) {
+  if (!m.original) m.original = bisect::measure_invariants(m.mesh);
+  return *m.original;
+}
+
 // ---------------------------------------------------------------------------
 // numpy -> Mesh
 
@@ -251,7 +260,6 @@ std::unique_ptr<PyMesh> finish(Mesh mesh, const std::string &origin) {
   py::gil_scoped_release release;
   bisect::prepare_input(m->mesh, origin);
   bisect::decode_state(m->mesh, origin);
-  m->original = bisect::measure_invariants(m->mesh);
   return m;
 }
 
@@ -379,6 +387,7 @@ py::dict refine(py::object self, const py::object &marked, const py::object &reg
   bisect::RefineResult r;
   {
     py::gil_scoped_release release;
+    original(m);
     bisect::ensure_marked(m.mesh, *marking);
     if (spec) {
       std::vector<CellId> touched = bisect::select_cells(m.mesh, *spec);
@@ -520,8 +529,8 @@ py::dict check(PyMesh &m, bool full) {
   bisect::Invariants now;
   {
     py::gil_scoped_release release;
-    r = full ? bisect::check_conformity(m.mesh, &m.original)
-             : bisect::check_refined(m.mesh, m.original);
+    const bisect::Invariants &before = original(m);
+    r = full ? bisect::check_conformity(m.mesh, &before) : bisect::check_refined(m.mesh, before);
     if (r.ok) now = bisect::measure_invariants(m.mesh, full);
   }
   if (!r.ok) throw bisect::Error(ErrorKind::Check, {}, "check failed: " + r.failure);
@@ -533,8 +542,8 @@ py::dict check(PyMesh &m, bool full) {
   out["boundary_measure"] = now.boundary_measure;
   out["boundary_facets"] = now.boundary_facets;
   if (full) out["euler"] = now.euler;
-  out["original_volume"] = m.original.volume;
-  out["original_boundary_measure"] = m.original.boundary_measure;
+  out["original_volume"] = m.original->volume;
+  out["original_boundary_measure"] = m.original->boundary_measure;
   return out;
 }
 
@@ -711,7 +720,6 @@ PYBIND11_MODULE(pybisect, m) {
         {
           py::gil_scoped_release release;
           out->mesh = bisect::load_mesh(path);
-          out->original = bisect::measure_invariants(out->mesh);
         }
         return out;
       },
