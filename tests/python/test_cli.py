@@ -34,3 +34,27 @@ def test_refine_matches_the_cli(bisect_bin, tmp_path):
     back = pybisect.read(out)
     assert (back.cells == mesh.cells).all()
     print(f"refine -n 2 ball.msh: cli {cli_seconds:.3f} s, module {module_seconds:.3f} s")
+
+
+def test_errors_carry_the_cli_message(bisect_bin, tmp_path):
+    # The same failure through the binary and through the module: the
+    # exception's message is the CLI's stderr line without "bisect: ".
+    bad_region = tmp_path / "bad.json"
+    bad_region.write_text('{"type": "sphere", "center": [0, 0, 0], "radius": -1}')
+    missing = tmp_path / "missing.msh"
+    cases = [
+        ([str(missing), "--region", str(DATA / "regions" / "sphere.json")],
+         lambda: pybisect.read(missing)),
+        ([str(DATA / "ball.msh"), "--region", str(bad_region)],
+         lambda: pybisect.read(DATA / "ball.msh").refine(region=str(bad_region))),
+    ]
+    for args, call in cases:
+        cli = subprocess.run([bisect_bin, "refine", *args, "-o", str(tmp_path / "out.vtu"), "-q"],
+                             capture_output=True, text=True)
+        assert cli.returncode == 1
+        try:
+            call()
+        except pybisect.Error as e:
+            assert "bisect: " + str(e) == cli.stderr.strip()
+        else:
+            raise AssertionError("no error")
