@@ -20,7 +20,7 @@ def test_to_meshio_from_meshio_keeps_cells_and_state(dim):
     mesh.refine(region={"type": "halfspace", "normal": [1] + [0] * (dim - 1), "offset": 0.6})
     m = mesh.to_meshio()
     assert m.cells[0].type == ("triangle" if dim == 2 else "tetra")
-    assert {"bisect:order", "bisect:stage", "bisect:tag", "bisect:marking", "label"} <= set(m.cell_data)
+    assert {"bisect:state", "bisect:marking", "label"} <= set(m.cell_data)
     back = pybisect.from_meshio(m)
     assert back.marked and back.marking == mesh.marking
     assert np.array_equal(back.cells, mesh.cells)  # same tuples: the state came back
