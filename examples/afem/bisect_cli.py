@@ -105,19 +105,28 @@ class BisectCLI:
         self.calls += 1
         result = read_vtu(dst)
         if not self.keep_files:
-            os.remove(src)
-            os.remove(dst)
+            for path in [src, dst, self._region_path()]:
+                if os.path.exists(path):
+                    os.remove(path)
         return result
 
-    def refine(self, points, cells, cell_data, eta=None, theta=0.5, name="eta"):
+    def has_refine_above(self):
+        text = self._help_text("refine")
+        return bool(text) and "--indicator" in text and "--above" in text
+
+    def refine(self, points, cells, cell_data, eta=None, theta=0.5, above=None,
+               name="eta"):
         """REFINE: returns the new (points, cells, cell_data).
 
         eta given: Doerfler marking with parameter theta on the indicator eta
         (one value per cell) by bisect itself (refine --indicator --dorfler);
-        if this bisect has no --indicator yet, the cells are marked here
-        (dorfler_marking) and handed over as a region: a union of tiny solid
+        with `above`, the cells with eta > above instead (refine --indicator
+        --above, if bisect has it). If this bisect lacks the option, the cells
+        are marked here and handed over as a region: a union of tiny solid
         balls at the marked cells' centroids, each inside its cell only.
         eta None: uniform refinement (a box around the whole mesh)."""
+        if eta is not None and above is not None and not np.any(np.asarray(eta) > above):
+            return points, cells, cell_data                  # nothing to refine
         start = time.perf_counter()
         src, dst = self._paths("refine")
         data = dict(cell_data)
@@ -131,16 +140,19 @@ class BisectCLI:
             region = {"type": "box", "min": (lo - pad).tolist(),
                       "max": (hi + pad).tolist()}
             args += ["--region", self._region_file(region)]
-        elif self.has_indicator_refine():
+        elif above is not None and self.has_refine_above():
+            args += ["--indicator", name, "--above", repr(float(above))]
+        elif above is None and self.has_indicator_refine():
             args += ["--indicator", name, "--dorfler", repr(float(theta))]
         else:
-            args += ["--region", self._marked_region(points, cells,
-                                                     dorfler_marking(eta, theta))]
+            marked = (np.asarray(eta) > above if above is not None
+                      else dorfler_marking(eta, theta))
+            args += ["--region", self._marked_region(points, cells, marked)]
         result = self._run(args, src, dst)
         self.seconds += time.perf_counter() - start
         return result
 
-    def coarsen(self, points, cells, cell_data, indicator, below, name="coarsen"):
+    def coarsen(self, points, cells, cell_data, indicator, below, name="eta"):
         """COARSEN: bisect coarsen --indicator name --below X. Raises
         BisectMissing if this bisect has no coarsen command."""
         if not self.has_coarsen():
@@ -152,14 +164,23 @@ class BisectCLI:
         data[name] = np.asarray(indicator, dtype=np.float64)
         write_vtu(src, points, cells, data)
         args = ["coarsen", src, "--indicator", name, "--below", repr(float(below)),
-                "-o", dst, "-q", "-f"]
+                "-o", dst]
+        # Options refine has; passed only if coarsen documents them too.
+        text = self._help_text("coarsen")
+        args += [opt for opt, flag in [("-q", "--quiet"), ("-f", "--force")]
+                 if flag in text]
+        if "--quality-csv" in text:
+            args += ["--quality-csv", "none"]
         result = self._run(args, src, dst)
         self.seconds += time.perf_counter() - start
         return result
 
     # -- region files -----------------------------------------------------
+    def _region_path(self):
+        return os.path.join(self.workdir, f"region-{self._step:03d}.json")
+
     def _region_file(self, region):
-        path = os.path.join(self.workdir, f"region-{self._step:03d}.json")
+        path = self._region_path()
         with open(path, "w") as f:
             json.dump(region, f)
         return path
