@@ -94,7 +94,11 @@ def main(argv=None):
     if args.small:
         args.steps, args.tol, args.sigma, args.settle = 12, 0.03, 0.08, 3
 
-    bisect = BisectCLI(args.bisect)
+    try:
+        bisect = BisectCLI(args.bisect)
+    except FileNotFoundError as missing:
+        print(f"error: {missing} (build it, or pass --bisect PATH)", file=sys.stderr)
+        return 1
     if not args.no_coarsen and not bisect.has_coarsen():
         print(f"skipped: bisect coarsen (--indicator NAME --below X) is not available "
               f"in {bisect.binary}", file=sys.stderr)

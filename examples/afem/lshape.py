@@ -166,7 +166,11 @@ def main(argv=None):
     uniform_loops = args.uniform_loops or args.loops
     os.makedirs(args.out, exist_ok=True)
     workdir = os.path.join(args.out, "files") if args.keep_files else None
-    bisect = BisectCLI(args.bisect, workdir=workdir, keep_files=args.keep_files)
+    try:
+        bisect = BisectCLI(args.bisect, workdir=workdir, keep_files=args.keep_files)
+    except FileNotFoundError as missing:
+        print(f"error: {missing} (build it, or pass --bisect PATH)", file=sys.stderr)
+        return 1
     how = ("bisect refine --indicator eta --dorfler" if bisect.has_indicator_refine()
            else "marked here, handed to bisect refine as a region (this bisect has "
                 "no --indicator yet)")
