@@ -78,15 +78,15 @@ def run(bisect, loops, adaptive, theta, n0, max_cells, out=None):
         solver_seconds += time.perf_counter() - start
         rows.append((loop, len(cells), int(free.sum()), len(points), error,
                      np.sqrt(np.sum(eta ** 2))))
-        if out and loop == loops - 1:
-            name = "adaptive" if adaptive else "uniform"
-            data = dict(cell_data, eta=eta)
-            write_vtu(os.path.join(out, f"lshape-{name}-final.vtu"), points, cells, data)
-        if loop == loops - 1:
-            break
-        if len(cells) * 2 > max_cells:
+        capped = loop < loops - 1 and len(cells) * 3 > max_cells   # uniform: x2.1-2.6
+        if capped:
             print(f"({'adaptive' if adaptive else 'uniform'} run stopped after loop "
                   f"{loop}: the next mesh could exceed --max-cells {max_cells})")
+        if loop == loops - 1 or capped:
+            if out:
+                name = "adaptive" if adaptive else "uniform"
+                write_vtu(os.path.join(out, f"lshape-{name}-final.vtu"), points, cells,
+                          dict(cell_data, eta=eta))
             break
         # MARK and REFINE (bisect marks: Doerfler on eta; uniform: everything).
         points, cells, cell_data = bisect.refine(
