@@ -96,7 +96,7 @@ def run(bisect, loops, adaptive, theta, n0, max_cells, out=None):
 
 def report(title, rows):
     print(f"\n{title}")
-    print(f"{'loop':>4} {'cells':>8} {'free':>8} {'vertices':>8} {'H1 error':>12} "
+    print(f"{'loop':>4} {'cells':>8} {'free v.':>8} {'all v.':>8} {'H1 error':>12} "
           f"{'estimator':>12} {'eff.':>6}")
     for loop, ncells, free, nverts, err, est in rows:
         print(f"{loop:4d} {ncells:8d} {free:8d} {nverts:8d} {err:12.4e} {est:12.4e} "
