@@ -1,12 +1,19 @@
-"""The REFINE and COARSEN steps through files: the mesh goes to bisect as .vtu
-(meshio), bisect refines or coarsens it, meshio reads the result back.
+"""The REFINE (and COARSEN) step of the examples, two ways:
 
-A mesh here is (points (N, 2), cells (M, 3), cell_data {name: (M, ...) array}).
-cell_data carries bisect's bisection state (the cell arrays "bisect:*"), which
-must go back into the next call unchanged so the bisection sequence continues;
-refine() and coarsen() keep every array they are given and only add/replace the
-indicator. An in-process variant (a Python module pybisect with
-mesh.refine(marked=...)) can replace this class with the same two methods.
+* BisectFiles: through files. The mesh goes to the bisect binary as .vtu
+  (meshio), bisect marks and refines it (`refine --indicator eta --dorfler
+  THETA` or `--above X`; uniform: a box region around the mesh), meshio reads
+  the result back. The cell arrays "bisect:*" bisect writes (the bisection
+  state) go back into the next call unchanged, so the bisection sequence
+  continues across the calls.
+* BisectModule: in process, through the Python module pybisect. The state
+  lives in a pybisect.Mesh; the cells are marked here (Dorfler: the same rule
+  as bisect's) and refined with mesh.refine(marked=mask). No files.
+
+Both hold the current mesh and expose it as `points` (N, 2) float64 and
+`cells` (M, 3) int64, and count the wall time spent in them in `seconds`
+(files: writing the .vtu, running bisect, reading the result; module: the
+marking, mesh.refine and copying the arrays out) and the calls in `calls`.
 """
 import json
 import os
@@ -19,7 +26,7 @@ import numpy as np
 
 
 class BisectMissing(RuntimeError):
-    """The bisect binary lacks a command or option an example needs."""
+    """The bisect binary lacks a command an example needs."""
 
 
 def repo_root():
@@ -31,13 +38,21 @@ def default_binary():
 
 
 def dorfler_marking(eta, theta):
-    """The fewest cells whose eta^2 sum to at least theta times the total."""
-    eta2 = np.asarray(eta, dtype=float) ** 2
-    order = np.argsort(-eta2, kind="stable")
-    cumulative = np.cumsum(eta2[order])
-    count = int(np.searchsorted(cumulative, theta * cumulative[-1]) + 1)
-    marked = np.zeros(len(eta2), dtype=bool)
-    marked[order[:min(count, len(eta2))]] = True
+    """Dorfler's bulk criterion, as `bisect refine --dorfler` computes it
+    (src/engine/indicator.cpp): cells by decreasing eta, ties to the lower id;
+    the fewest of them whose eta^2 sum to at least theta times the total.
+    The total is summed in cell order and the running sum in the sorted order,
+    left to right, as the C++ loop does, so both round alike."""
+    eta = np.asarray(eta, dtype=np.float64)
+    marked = np.zeros(len(eta), dtype=bool)
+    eta2 = eta * eta
+    total = np.cumsum(eta2)[-1] if len(eta) else 0.0       # sequential, not pairwise
+    if total == 0:
+        return marked
+    order = np.lexsort((np.arange(len(eta)), -eta))        # by -eta, then by id
+    running = np.cumsum(eta2[order])
+    count = int(np.searchsorted(running, theta * total, side="left")) + 1
+    marked[order[:min(count, len(eta))]] = True
     return marked
 
 
@@ -58,11 +73,19 @@ def read_vtu(path):
     return mesh.points[:, :2].copy(), cells, cell_data
 
 
-class BisectCLI:
-    """Runs the bisect binary on scratch files. Accumulates the wall time spent
-    in the calls (including meshio writing/reading) in `seconds`."""
+def uniform_box(points):
+    """A box region around the whole mesh: every cell touches it."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    pad = 1.0 + (hi - lo).max()
+    return {"type": "box", "min": (lo - pad).tolist(), "max": (hi + pad).tolist()}
 
-    def __init__(self, binary=None, workdir=None, keep_files=False):
+
+class BisectFiles:
+    """The bisect binary on scratch .vtu files."""
+
+    via = "files"
+
+    def __init__(self, points, cells, binary=None, workdir=None, keep_files=False):
         self.binary = os.path.abspath(binary or default_binary())
         if not os.access(self.binary, os.X_OK):
             raise FileNotFoundError(f"bisect binary not found: {self.binary}")
@@ -70,132 +93,103 @@ class BisectCLI:
         self.workdir = workdir or self._tmp.name
         os.makedirs(self.workdir, exist_ok=True)
         self.keep_files = keep_files
+        self.points = np.asarray(points, dtype=np.float64)
+        self.cells = np.asarray(cells, dtype=np.int64)
+        self.cell_data = {}                     # the bisect:* state arrays, passed back
         self.seconds = 0.0
         self.calls = 0
         self._step = 0
-        self._help = {}
-
-    # -- capability checks ------------------------------------------------
-    def _help_text(self, command):
-        if command not in self._help:
-            run = subprocess.run([self.binary, command, "--help"],
-                                 capture_output=True, text=True)
-            self._help[command] = run.stdout if run.returncode == 0 else None
-        return self._help[command]
-
-    def has_indicator_refine(self):
-        text = self._help_text("refine")
-        return bool(text) and "--indicator" in text and "--dorfler" in text
 
     def has_coarsen(self):
-        text = self._help_text("coarsen")
-        return bool(text) and "--indicator" in text and "--below" in text
+        """Whether this binary has a `coarsen` command at all."""
+        run = subprocess.run([self.binary, "coarsen", "--help"], capture_output=True)
+        return run.returncode == 0
 
-    # -- the steps ----------------------------------------------------------
-    def _paths(self, what):
+    def _call(self, what, args, indicator=None, region=None):
+        start = time.perf_counter()
         self._step += 1
         stem = os.path.join(self.workdir, f"{what}-{self._step:03d}")
-        return stem + "-in.vtu", stem + "-out.vtu"
-
-    def _run(self, args, src, dst):
-        run = subprocess.run([self.binary] + args, capture_output=True, text=True)
+        src, dst, spec = stem + "-in.vtu", stem + "-out.vtu", stem + "-region.json"
+        data = dict(self.cell_data)
+        if indicator is not None:
+            data["eta"] = np.asarray(indicator, dtype=np.float64)
+        write_vtu(src, self.points, self.cells, data)
+        if region is not None:
+            with open(spec, "w") as f:
+                json.dump(region, f)
+            args = args + ["--region", spec]
+        cmd = [self.binary, what, src] + args + ["-o", dst, "-q", "-f"]
+        run = subprocess.run(cmd, capture_output=True, text=True)
         if run.returncode != 0:
-            raise RuntimeError(f"bisect {' '.join(args)} failed (exit "
-                               f"{run.returncode}): {run.stderr.strip()}")
-        self.calls += 1
-        result = read_vtu(dst)
+            raise RuntimeError(f"{' '.join(cmd)} failed (exit {run.returncode}): "
+                               f"{run.stderr.strip()}")
+        points, cells, cell_data = read_vtu(dst)
         if not self.keep_files:
-            for path in [src, dst, self._region_path()]:
+            for path in (src, dst, spec):
                 if os.path.exists(path):
                     os.remove(path)
-        return result
-
-    def has_refine_above(self):
-        text = self._help_text("refine")
-        return bool(text) and "--indicator" in text and "--above" in text
-
-    def refine(self, points, cells, cell_data, eta=None, theta=0.5, above=None,
-               name="eta"):
-        """REFINE: returns the new (points, cells, cell_data).
-
-        eta given: Doerfler marking with parameter theta on the indicator eta
-        (one value per cell) by bisect itself (refine --indicator --dorfler);
-        with `above`, the cells with eta > above instead (refine --indicator
-        --above, if bisect has it). If this bisect lacks the option, the cells
-        are marked here and handed over as a region: a union of tiny solid
-        balls at the marked cells' centroids, each inside its cell only.
-        eta None: uniform refinement (a box around the whole mesh)."""
-        if eta is not None and above is not None and not np.any(np.asarray(eta) > above):
-            return points, cells, cell_data                  # nothing to refine
-        start = time.perf_counter()
-        src, dst = self._paths("refine")
-        data = dict(cell_data)
-        if eta is not None:
-            data[name] = np.asarray(eta, dtype=np.float64)
-        write_vtu(src, points, cells, data)
-        args = ["refine", src, "-o", dst, "-q", "--quality-csv", "none", "-f"]
-        if eta is None:
-            lo, hi = points.min(axis=0), points.max(axis=0)
-            pad = 1.0 + (hi - lo).max()
-            region = {"type": "box", "min": (lo - pad).tolist(),
-                      "max": (hi + pad).tolist()}
-            args += ["--region", self._region_file(region)]
-        elif above is not None and self.has_refine_above():
-            args += ["--indicator", name, "--above", repr(float(above))]
-        elif above is None and self.has_indicator_refine():
-            args += ["--indicator", name, "--dorfler", repr(float(theta))]
-        else:
-            marked = (np.asarray(eta) > above if above is not None
-                      else dorfler_marking(eta, theta))
-            args += ["--region", self._marked_region(points, cells, marked)]
-        result = self._run(args, src, dst)
+        self.points, self.cells = points, cells
+        self.cell_data = {k: v for k, v in cell_data.items() if k.startswith("bisect:")}
+        self.calls += 1
         self.seconds += time.perf_counter() - start
-        return result
 
-    def coarsen(self, points, cells, cell_data, indicator, below, name="eta"):
-        """COARSEN: bisect coarsen --indicator name --below X. Raises
-        BisectMissing if this bisect has no coarsen command."""
+    def refine_dorfler(self, eta, theta):
+        self._call("refine", ["--indicator", "eta", "--dorfler", repr(float(theta)),
+                              "--quality-csv", "none"], indicator=eta)
+
+    def refine_above(self, eta, tol):
+        self._call("refine", ["--indicator", "eta", "--above", repr(float(tol)),
+                              "--quality-csv", "none"], indicator=eta)
+
+    def refine_uniform(self):
+        self._call("refine", ["--quality-csv", "none"], region=uniform_box(self.points))
+
+    def coarsen_below(self, eta, below, passes=1):
         if not self.has_coarsen():
-            raise BisectMissing("bisect coarsen (with --indicator and --below) "
-                                f"is not available in {self.binary}")
+            raise BisectMissing(f"bisect coarsen is not available in {self.binary}")
+        self._call("coarsen", ["--indicator", "eta", "--below", repr(float(below)),
+                               "-n", str(int(passes))], indicator=eta)
+
+
+class BisectModule:
+    """pybisect in process: one pybisect.Mesh, refined in place."""
+
+    via = "module"
+
+    def __init__(self, points, cells):
+        import pybisect
+        self.pybisect = pybisect
         start = time.perf_counter()
-        src, dst = self._paths("coarsen")
-        data = dict(cell_data)
-        data[name] = np.asarray(indicator, dtype=np.float64)
-        write_vtu(src, points, cells, data)
-        args = ["coarsen", src, "--indicator", name, "--below", repr(float(below)),
-                "-o", dst]
-        # Options refine has; passed only if coarsen documents them too.
-        text = self._help_text("coarsen")
-        args += [opt for opt, flag in [("-q", "--quiet"), ("-f", "--force")]
-                 if flag in text]
-        if "--quality-csv" in text:
-            args += ["--quality-csv", "none"]
-        result = self._run(args, src, dst)
+        self.mesh = pybisect.Mesh(np.asarray(points, dtype=np.float64),
+                                  np.asarray(cells, dtype=np.int64))
+        self._fetch()
+        self.seconds = time.perf_counter() - start
+        self.calls = 0
+
+    def _fetch(self):
+        # Copies: the solver indexes with int64 and keeps the arrays while
+        # the mesh is refined (views would then show the old mesh anyway).
+        self.points = np.array(self.mesh.points, dtype=np.float64)
+        self.cells = np.array(self.mesh.cells, dtype=np.int64)
+
+    def _refine(self, **kwargs):
+        start = time.perf_counter()
+        marked = kwargs.pop("mask", None)
+        if marked is not None:
+            kwargs["marked"] = marked
+        self.mesh.refine(**kwargs)
+        self._fetch()
+        self.calls += 1
         self.seconds += time.perf_counter() - start
-        return result
 
-    # -- region files -----------------------------------------------------
-    def _region_path(self):
-        return os.path.join(self.workdir, f"region-{self._step:03d}.json")
+    def refine_dorfler(self, eta, theta):
+        start = time.perf_counter()
+        mask = dorfler_marking(eta, theta)
+        self.seconds += time.perf_counter() - start
+        self._refine(mask=mask)
 
-    def _region_file(self, region):
-        path = self._region_path()
-        with open(path, "w") as f:
-            json.dump(region, f)
-        return path
+    def refine_above(self, eta, tol):
+        self._refine(mask=np.asarray(eta) > tol)
 
-    def _marked_region(self, points, cells, marked):
-        """Fallback marking: a solid ball at each marked cell's centroid with a
-        radius a thousandth of the cell's inradius touches that cell only."""
-        p = points[cells[marked]]
-        centroid = p.mean(axis=1)
-        a = np.linalg.norm(p[:, 1] - p[:, 2], axis=1)
-        b = np.linalg.norm(p[:, 2] - p[:, 0], axis=1)
-        c = np.linalg.norm(p[:, 0] - p[:, 1], axis=1)
-        s = 0.5 * (a + b + c)
-        area = np.sqrt(np.maximum(s * (s - a) * (s - b) * (s - c), 0.0))
-        radius = 1e-3 * area / s
-        balls = [{"type": "sphere", "center": ctr.tolist(), "radius": float(r),
-                  "solid": True} for ctr, r in zip(centroid, radius)]
-        return self._region_file({"type": "union", "regions": balls})
+    def refine_uniform(self):
+        self._refine(mask=np.ones(self.mesh.num_cells, dtype=bool))

@@ -14,6 +14,7 @@ the loops, the time spent in bisect and in the solver, and writes
 afem-out/lshape-convergence.png.
 """
 import argparse
+import json
 import os
 import sys
 import time
@@ -22,7 +23,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import p1  # noqa: E402
-from bisect_cli import BisectCLI, default_binary, write_vtu  # noqa: E402
+from bisect_cli import (BisectFiles, BisectModule, default_binary,  # noqa: E402
+                        write_vtu)
 
 
 def angle(x, y):
@@ -64,13 +66,24 @@ def lshape_mesh(n=1):
     return points[used], renumber[cells]
 
 
-def run(bisect, loops, adaptive, theta, n0, max_cells, out=None):
+def make_bisect(args, points, cells):
+    """The REFINE step for --via: BisectFiles (the binary, .vtu files) or
+    BisectModule (pybisect in process), holding the initial mesh."""
+    if args.via == "module":
+        return BisectModule(points, cells)
+    workdir = os.path.join(args.out, "files") if args.keep_files else None
+    return BisectFiles(points, cells, args.bisect, workdir=workdir,
+                       keep_files=args.keep_files)
+
+
+def run(args, loops, adaptive):
     """The AFEM loop; returns rows (loop, cells, free vertices, all vertices,
-    H1 error, estimator) and the seconds spent solving/estimating."""
-    points, cells = lshape_mesh(n0)
-    cell_data = {}
+    H1 error, estimator), the seconds spent solving/estimating, and the
+    bisect object (its seconds and calls)."""
+    bisect = make_bisect(args, *lshape_mesh(args.initial))
     rows, solver_seconds = [], 0.0
     for loop in range(loops):
+        points, cells = bisect.points, bisect.cells
         start = time.perf_counter()
         u, free = p1.solve_dirichlet(points, cells, exact)              # SOLVE
         eta = p1.residual_estimator(points, cells, u)                  # ESTIMATE
@@ -78,20 +91,23 @@ def run(bisect, loops, adaptive, theta, n0, max_cells, out=None):
         solver_seconds += time.perf_counter() - start
         rows.append((loop, len(cells), int(free.sum()), len(points), error,
                      np.sqrt(np.sum(eta ** 2))))
-        capped = loop < loops - 1 and len(cells) * 3 > max_cells   # uniform: x2.1-2.6
+        capped = loop < loops - 1 and len(cells) * 3 > args.max_cells   # uniform: x2.1-2.6
         if capped:
             print(f"({'adaptive' if adaptive else 'uniform'} run stopped after loop "
-                  f"{loop}: the next mesh could exceed --max-cells {max_cells})")
+                  f"{loop}: the next mesh could exceed --max-cells {args.max_cells})")
         if loop == loops - 1 or capped:
-            if out:
+            if args.out:
                 name = "adaptive" if adaptive else "uniform"
-                write_vtu(os.path.join(out, f"lshape-{name}-final.vtu"), points, cells,
-                          dict(cell_data, eta=eta))
+                write_vtu(os.path.join(args.out, f"lshape-{name}-final.vtu"), points,
+                          cells, {"eta": eta})
             break
-        # MARK and REFINE (bisect marks: Doerfler on eta; uniform: everything).
-        points, cells, cell_data = bisect.refine(
-            points, cells, cell_data, eta=eta if adaptive else None, theta=theta)
-    return rows, solver_seconds
+        # MARK + REFINE: Doerfler on eta (files: bisect marks; module: marked
+        # here with the same rule), or every cell once (uniform).
+        if adaptive:
+            bisect.refine_dorfler(eta, args.theta)
+        else:
+            bisect.refine_uniform()
+    return rows, solver_seconds, bisect
 
 
 def report(title, rows):
@@ -159,43 +175,61 @@ def main(argv=None):
                         help="a quick run: 8 loops each (for tests)")
     parser.add_argument("--out", default="afem-out", help="output directory (afem-out)")
     parser.add_argument("--keep-files", action="store_true",
-                        help="keep every mesh passed to and from bisect in OUT/files")
+                        help="keep every mesh passed to and from bisect in OUT/files "
+                             "(--via files)")
+    parser.add_argument("--rows-json", metavar="FILE",
+                        help="also write both tables at full precision as JSON (for "
+                             "comparing --via files with --via module)")
+    parser.add_argument("--via", choices=["files", "module"], default="files",
+                        help="REFINE through the bisect binary and .vtu files (default), "
+                             "or in process through the Python module pybisect")
     args = parser.parse_args(argv)
     if args.small:
         args.loops = 8
     uniform_loops = args.uniform_loops or args.loops
     os.makedirs(args.out, exist_ok=True)
-    workdir = os.path.join(args.out, "files") if args.keep_files else None
-    try:
-        bisect = BisectCLI(args.bisect, workdir=workdir, keep_files=args.keep_files)
-    except FileNotFoundError as missing:
-        print(f"error: {missing} (build it, or pass --bisect PATH)", file=sys.stderr)
+    if args.via == "files" and not os.access(args.bisect, os.X_OK):
+        print(f"error: bisect binary not found: {args.bisect} (build it, or pass "
+              "--bisect PATH)", file=sys.stderr)
         return 1
-    how = ("bisect refine --indicator eta --dorfler" if bisect.has_indicator_refine()
-           else "marked here, handed to bisect refine as a region (this bisect has "
-                "no --indicator yet)")
-    print(f"bisect: {bisect.binary}\nmarking: Doerfler theta = {args.theta}, {how}")
+    if args.via == "module":
+        try:
+            import pybisect
+        except ImportError as missing:
+            print(f"error: {missing} (build the target pybisect and put its directory, "
+                  "build/python, on PYTHONPATH)", file=sys.stderr)
+            return 1
+        print(f"via: module pybisect ({pybisect.__file__}): Doerfler marking theta = "
+              f"{args.theta} here, mesh.refine(marked=mask)")
+    else:
+        print(f"via: files, bisect {os.path.abspath(args.bisect)}: bisect refine "
+              f"--indicator eta --dorfler {args.theta}")
     print("unknowns = free (interior) vertices; estimator = sqrt(sum eta_T^2), "
           "jump terms only (f = 0, no Dirichlet oscillation term)")
 
     t0 = time.perf_counter()
-    adaptive, solve_a = run(bisect, args.loops, True, args.theta, args.initial,
-                            args.max_cells, args.out)
-    bisect_a, calls_a = bisect.seconds, bisect.calls
-    uniform, solve_u = run(bisect, uniform_loops, False, args.theta, args.initial,
-                           args.max_cells, args.out)
-    bisect_u, calls_u = bisect.seconds - bisect_a, bisect.calls - calls_a
+    adaptive, solve_a, bisect_a = run(args, args.loops, True)
+    uniform, solve_u, bisect_u = run(args, uniform_loops, False)
     slope_a = report("adaptive", adaptive)
     slope_u = report("uniform", uniform)
+    if args.rows_json:
+        keys = ("loop", "cells", "free", "vertices", "error", "estimator")
+        with open(args.rows_json, "w") as f:
+            json.dump({"via": args.via,
+                       "adaptive": [dict(zip(keys, r)) for r in adaptive],
+                       "uniform": [dict(zip(keys, r)) for r in uniform]}, f, indent=1)
     png = os.path.join(args.out, "lshape-convergence.png")
     plot(png, adaptive, uniform)
     print(f"\nslopes: adaptive {slope_a:+.3f} (expected about -0.5), "
           f"uniform {slope_u:+.3f} (expected about -0.33)")
-    print(f"time: adaptive bisect {bisect_a:.2f} s in {calls_a} calls, solver "
-          f"{solve_a:.2f} s; uniform bisect {bisect_u:.2f} s in {calls_u} calls, "
-          f"solver {solve_u:.2f} s; total {time.perf_counter() - t0:.2f} s")
-    print("(bisect time: writing the .vtu, running bisect, reading the result; "
-          "solver time: assembly, solve, estimator and H1 error)")
+    what = ("writing the .vtu, running bisect, reading the result" if args.via == "files"
+            else "Doerfler marking, mesh.refine, copying points and cells out")
+    print(f"time via {args.via}: adaptive bisect {bisect_a.seconds:.2f} s in "
+          f"{bisect_a.calls} calls, solver {solve_a:.2f} s; uniform bisect "
+          f"{bisect_u.seconds:.2f} s in {bisect_u.calls} calls, solver {solve_u:.2f} s")
+    print(f"time via {args.via}: bisect {bisect_a.seconds + bisect_u.seconds:.2f} s, "
+          f"solver {solve_a + solve_u:.2f} s, total {time.perf_counter() - t0:.2f} s")
+    print(f"(bisect time: {what}; solver time: assembly, solve, estimator and H1 error)")
     print(f"plot: {png}")
     return 0
 
