@@ -126,8 +126,12 @@ def h1_error(points, cells, u, grad_exact, singular_point=(0.0, 0.0), order=6):
     grad_u = np.einsum("mi,mik->mk", u[cells], grads)
     # Roll each cell's vertices so the vertex nearest the singularity is local 1
     # (the collapse vertex of the rule); the triangle itself is unchanged.
+    # Ties (two vertices at the same distance) go to the lower vertex id, so
+    # the result does not depend on the order of the vertices within a cell.
     dist = np.linalg.norm(points[cells] - np.asarray(singular_point), axis=2)
-    shift = (np.argmin(dist, axis=1) - 1) % 3
+    tied = dist == dist.min(axis=1, keepdims=True)
+    nearest = np.argmin(np.where(tied, cells, np.iinfo(np.int64).max), axis=1)
+    shift = (nearest - 1) % 3
     idx = (np.arange(3)[None, :] + shift[:, None]) % 3
     rolled = np.take_along_axis(cells, idx, axis=1)
     bary, weight = collapsed_gauss(order)
