@@ -101,9 +101,12 @@ class BisectFiles:
         self._step = 0
 
     def has_coarsen(self):
-        """Whether this binary has a `coarsen` command at all."""
-        run = subprocess.run([self.binary, "coarsen", "--help"], capture_output=True)
-        return run.returncode == 0
+        """Whether this binary has a `coarsen` command at all (for an unknown
+        command, `bisect CMD --help` prints the top-level usage, exit 0)."""
+        run = subprocess.run([self.binary, "coarsen", "--help"], capture_output=True,
+                             text=True)
+        usage = [line for line in run.stdout.splitlines() if line.startswith("Usage:")]
+        return run.returncode == 0 and bool(usage) and " coarsen " in usage[0] + " "
 
     def _call(self, what, args, indicator=None, region=None):
         start = time.perf_counter()

@@ -5,10 +5,11 @@ A Gaussian bump f(x, t) = exp(-|x - c(t)|^2 / (2 sigma^2)) moves across the
 unit square along a straight line in --steps steps. At each step the mesh is
 adapted to the source at its new position:
 
-  COARSEN  bisect coarsen --indicator eta --below TOL/8  (undo bisections where
-           the source is resolved well enough, i.e. behind the front), then
-  REFINE   bisect refine (the cells with eta > TOL) until no cell is above TOL
-           or --max-refine iterations were made,
+  COARSEN  bisect coarsen --indicator eta --below TOL/8 -n PASSES (undo
+           bisections where the source is resolved well enough, i.e. behind
+           the front), then
+  REFINE   bisect refine --indicator eta --above TOL until no cell is above
+           TOL or --max-refine iterations were made,
 
 where eta_T is the P1 interpolation error of f on T measured at the edge
 midpoints, max over the edges of |f(mid) - (f(a) + f(b))/2|. The factor 8
@@ -30,7 +31,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bisect_cli import BisectCLI, BisectMissing, default_binary, write_vtu  # noqa: E402
+from bisect_cli import BisectFiles, BisectMissing, default_binary, write_vtu  # noqa: E402
 
 SKIP = 77
 
@@ -83,6 +84,8 @@ def main(argv=None):
                         help="initial mesh: n x n squares of two triangles (8)")
     parser.add_argument("--max-refine", type=int, default=10,
                         help="refine iterations per step at most (10)")
+    parser.add_argument("--coarsen-passes", type=int, default=1,
+                        help="coarsening passes per step (bisect coarsen -n; default 1)")
     parser.add_argument("--settle", type=int, default=5,
                         help="steps before the cell count is expected to be steady (5)")
     parser.add_argument("--small", action="store_true",
@@ -94,8 +97,9 @@ def main(argv=None):
     if args.small:
         args.steps, args.tol, args.sigma, args.settle = 12, 0.03, 0.08, 3
 
+    points, cells = square_mesh(args.initial)
     try:
-        bisect = BisectCLI(args.bisect)
+        bisect = BisectFiles(points, cells, args.bisect)
     except FileNotFoundError as missing:
         print(f"error: {missing} (build it, or pass --bisect PATH)", file=sys.stderr)
         return 1
@@ -108,39 +112,37 @@ def main(argv=None):
     below = args.tol / 8
     print(f"bisect: {bisect.binary}\nsource: Gaussian, sigma {args.sigma}, from "
           f"{tuple(source.start)} to {tuple(source.end)} in {args.steps} steps; "
-          f"refine eta > {args.tol:g}, coarsen eta < {below:g}"
+          f"refine eta > {args.tol:g}, coarsen eta < {below:g} "
+          f"({args.coarsen_passes} pass{'es' if args.coarsen_passes != 1 else ''} a step)"
           + (" (coarsening off)" if args.no_coarsen else ""))
-    points, cells = square_mesh(args.initial)
-    cell_data = {}
     counts, other_seconds = [], 0.0
     print(f"{'step':>4} {'t':>6} {'after coarsen':>13} {'cells':>7} {'vertices':>8} "
           f"{'refines':>7} {'max eta':>9}")
     for step in range(args.steps):
         t = step / max(args.steps - 1, 1)
         f = lambda pts: source(pts, t)                       # noqa: E731
-        after_coarsen = len(cells)
         if step > 0 and not args.no_coarsen:
             start = time.perf_counter()
-            eta = interpolation_indicator(points, cells, f)
+            eta = interpolation_indicator(bisect.points, bisect.cells, f)
             other_seconds += time.perf_counter() - start
-            points, cells, cell_data = bisect.coarsen(points, cells, cell_data, eta, below)
-            after_coarsen = len(cells)
+            bisect.coarsen_below(eta, below, args.coarsen_passes)
+        after_coarsen = len(bisect.cells)
         refines = 0
         while True:
             start = time.perf_counter()
-            eta = interpolation_indicator(points, cells, f)
+            eta = interpolation_indicator(bisect.points, bisect.cells, f)
             other_seconds += time.perf_counter() - start
             if eta.max() <= args.tol or refines == args.max_refine:
                 break
-            points, cells, cell_data = bisect.refine(points, cells, cell_data,
-                                                     eta=eta, above=args.tol)
+            bisect.refine_above(eta, args.tol)
             refines += 1
+        points, cells = bisect.points, bisect.cells
         counts.append(len(cells))
         print(f"{step:4d} {t:6.3f} {after_coarsen:13d} {len(cells):7d} {len(points):8d} "
               f"{refines:7d} {eta.max():9.2e}")
         if step in (0, args.steps // 2, args.steps - 1):
             write_vtu(os.path.join(args.out, f"heat-step{step:02d}.vtu"), points, cells,
-                      dict(cell_data, eta=eta, source=f(points[cells].mean(axis=1))))
+                      dict(bisect.cell_data, eta=eta, source=f(points[cells].mean(axis=1))))
 
     steady = np.array(counts[args.settle:], float)
     mean = steady.mean()
