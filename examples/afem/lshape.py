@@ -2,11 +2,15 @@
 """Adaptive P1 finite elements for the Laplace equation on the L-shaped domain
 (-1,1)^2 minus [0,1)x(-1,0], with the exact solution u = r^(2/3) sin(2 theta/3)
 (theta in [0, 3 pi/2], measured counter-clockwise from the positive x axis) as
-Dirichlet data. The loop SOLVE -> ESTIMATE -> MARK -> REFINE runs through
-files: bisect refines the mesh (Doerfler marking on the residual estimator),
-and the same number of loops is run with uniform refinement for comparison.
+Dirichlet data. The loop SOLVE -> ESTIMATE -> MARK -> REFINE refines with
+Doerfler marking on the residual estimator, either through files (--via files,
+the default: bisect refine --indicator eta --dorfler THETA on a .vtu) or in
+process (--via module: the marking here, pybisect's mesh.refine(marked=mask));
+both give the same meshes. The same number of loops is run with uniform
+refinement for comparison.
 
     /usr/bin/python3 examples/afem/lshape.py --loops 16 --out afem-out/
+    PYTHONPATH=build/python /usr/bin/python3 examples/afem/lshape.py --loops 16 --via module
 
 prints a table per run (loop, free vertices, H1 error, estimator), the
 fitted slopes of log(error) against log(free vertices) over the later half of
