@@ -99,14 +99,18 @@ class BisectFiles:
         self.seconds = 0.0
         self.calls = 0
         self._step = 0
+        self._has_coarsen = None
 
     def has_coarsen(self):
         """Whether this binary has a `coarsen` command at all (for an unknown
         command, `bisect CMD --help` prints the top-level usage, exit 0)."""
-        run = subprocess.run([self.binary, "coarsen", "--help"], capture_output=True,
-                             text=True)
-        usage = [line for line in run.stdout.splitlines() if line.startswith("Usage:")]
-        return run.returncode == 0 and bool(usage) and " coarsen " in usage[0] + " "
+        if self._has_coarsen is None:
+            run = subprocess.run([self.binary, "coarsen", "--help"], capture_output=True,
+                                 text=True)
+            usage = [line for line in run.stdout.splitlines() if line.startswith("Usage:")]
+            self._has_coarsen = (run.returncode == 0 and bool(usage)
+                                 and " coarsen " in usage[0] + " ")
+        return self._has_coarsen
 
     def _call(self, what, args, indicator=None, region=None):
         start = time.perf_counter()
