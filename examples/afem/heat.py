@@ -20,8 +20,7 @@ within +-25% of its mean after the first steps.
 
     /usr/bin/python3 examples/afem/heat.py --steps 30 --out afem-out/
 
-Exit 77 (skip) if this bisect has no `coarsen` command (with --indicator and
---below); --no-coarsen runs the refinement alone (the count then grows).
+Exit 77 (skip) if this bisect has no `coarsen` command; --no-coarsen runs the refinement alone (the count then grows).
 """
 import argparse
 import os
@@ -104,7 +103,7 @@ def main(argv=None):
         print(f"error: {missing} (build it, or pass --bisect PATH)", file=sys.stderr)
         return 1
     if not args.no_coarsen and not bisect.has_coarsen():
-        print(f"skipped: bisect coarsen (--indicator NAME --below X) is not available "
+        print(f"skipped: bisect coarsen is not available "
               f"in {bisect.binary}", file=sys.stderr)
         return SKIP
     os.makedirs(args.out, exist_ok=True)
