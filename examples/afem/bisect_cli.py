@@ -56,9 +56,10 @@ def dorfler_marking(eta, theta):
     return marked
 
 
-def write_vtu(path, points, cells, cell_data):
+def write_vtu(path, points, cells, cell_data, point_data=None):
     xyz = np.column_stack([points, np.zeros(len(points))])
     meshio.write(path, meshio.Mesh(xyz, [("triangle", cells)],
+                                   point_data=dict(point_data or {}),
                                    cell_data={k: [v] for k, v in cell_data.items()}))
 
 
@@ -70,7 +71,7 @@ def read_vtu(path):
                            f"{[b.type for b in mesh.cells]}")
     cells = np.concatenate([b.data for b in blocks]).astype(np.int64)
     cell_data = {k: np.concatenate(v) for k, v in mesh.cell_data.items()}
-    return mesh.points[:, :2].copy(), cells, cell_data
+    return mesh.points[:, :2].copy(), cells, cell_data, dict(mesh.point_data)
 
 
 def uniform_box(points):
@@ -95,7 +96,10 @@ class BisectFiles:
         self.keep_files = keep_files
         self.points = np.asarray(points, dtype=np.float64)
         self.cells = np.asarray(cells, dtype=np.int64)
-        self.cell_data = {}                     # the bisect:* state arrays, passed back
+        # The bisect:* arrays bisect writes (the bisection state; with coarsen,
+        # the tree: bisect:generation per cell, bisect:parent_a/b per vertex),
+        # passed back unchanged with the next input.
+        self.cell_data, self.point_data = {}, {}
         self.seconds = 0.0
         self.calls = 0
         self._step = 0
@@ -120,7 +124,7 @@ class BisectFiles:
         data = dict(self.cell_data)
         if indicator is not None:
             data["eta"] = np.asarray(indicator, dtype=np.float64)
-        write_vtu(src, self.points, self.cells, data)
+        write_vtu(src, self.points, self.cells, data, self.point_data)
         if region is not None:
             with open(spec, "w") as f:
                 json.dump(region, f)
@@ -130,13 +134,14 @@ class BisectFiles:
         if run.returncode != 0:
             raise RuntimeError(f"{' '.join(cmd)} failed (exit {run.returncode}): "
                                f"{run.stderr.strip()}")
-        points, cells, cell_data = read_vtu(dst)
+        points, cells, cell_data, point_data = read_vtu(dst)
         if not self.keep_files:
             for path in (src, dst, spec):
                 if os.path.exists(path):
                     os.remove(path)
         self.points, self.cells = points, cells
         self.cell_data = {k: v for k, v in cell_data.items() if k.startswith("bisect:")}
+        self.point_data = {k: v for k, v in point_data.items() if k.startswith("bisect:")}
         self.calls += 1
         self.seconds += time.perf_counter() - start
 

@@ -77,7 +77,9 @@ def main(argv=None):
                         help="the bisect binary (default: build/bisect of this repository)")
     parser.add_argument("--steps", type=int, default=30, help="time steps (30)")
     parser.add_argument("--tol", type=float, default=0.01,
-                        help="refine cells with eta > TOL; coarsen below TOL/8 (0.01)")
+                        help="refine cells with eta > TOL (0.01)")
+    parser.add_argument("--coarsen-ratio", type=float, default=8,
+                        help="coarsen cells with eta < TOL / RATIO (8)")
     parser.add_argument("--sigma", type=float, default=0.05, help="width of the bump (0.05)")
     parser.add_argument("--initial", type=int, default=8,
                         help="initial mesh: n x n squares of two triangles (8)")
@@ -108,7 +110,7 @@ def main(argv=None):
         return SKIP
     os.makedirs(args.out, exist_ok=True)
     source = Source(start=(0.2, 0.25), end=(0.8, 0.75), sigma=args.sigma)
-    below = args.tol / 8
+    below = args.tol / args.coarsen_ratio
     print(f"bisect: {bisect.binary}\nsource: Gaussian, sigma {args.sigma}, from "
           f"{tuple(source.start)} to {tuple(source.end)} in {args.steps} steps; "
           f"refine eta > {args.tol:g}, coarsen eta < {below:g} "
@@ -141,7 +143,8 @@ def main(argv=None):
               f"{refines:7d} {eta.max():9.2e}")
         if step in (0, args.steps // 2, args.steps - 1):
             write_vtu(os.path.join(args.out, f"heat-step{step:02d}.vtu"), points, cells,
-                      dict(bisect.cell_data, eta=eta, source=f(points[cells].mean(axis=1))))
+                      dict(bisect.cell_data, eta=eta, source=f(points[cells].mean(axis=1))),
+                      bisect.point_data)
 
     steady = np.array(counts[args.settle:], float)
     mean = steady.mean()
