@@ -679,6 +679,36 @@ std::string find_hanging_node(const Mesh &mesh, const std::vector<VertexId> &bnd
 // in the grid cells its bounding box covers. Not a proof of validity (two
 // thin crossing cells may keep their centroids apart), but cheap and exact in
 // what it reports.
+// Two vertices used by cells at exactly the same coordinates, as one line
+// naming them (empty when there are none). O(n log n); run only to explain a
+// failed check.
+std::string find_duplicate_vertices(const Mesh &mesh) {
+  std::vector<char> used(mesh.num_vertices(), 0);
+  for (VertexId v : mesh.cells) used[v] = 1;
+  std::vector<VertexId> order;
+  for (std::size_t v = 0; v < used.size(); ++v)
+    if (used[v]) order.push_back(VertexId(v));
+  const int d = mesh.dim;
+  auto less = [&](VertexId a, VertexId b) {
+    return std::lexicographical_compare(mesh.point(a), mesh.point(a) + d, mesh.point(b), mesh.point(b) + d);
+  };
+  std::sort(order.begin(), order.end(), [&](VertexId a, VertexId b) { return less(a, b) || (!less(b, a) && a < b); });
+  std::size_t pairs = 0;
+  VertexId first_a = 0, first_b = 0;
+  for (std::size_t i = 1; i < order.size(); ++i)
+    if (std::equal(mesh.point(order[i]), mesh.point(order[i]) + d, mesh.point(order[i - 1]))) {
+      if (pairs++ == 0) first_a = order[i - 1], first_b = order[i];
+    }
+  if (pairs == 0) return {};
+  std::string at;
+  for (int k = 0; k < d; ++k) at += (k ? ", " : "") + format("%.17g", mesh.point(first_a)[k], 0, 0);
+  return "duplicate vertices: " + std::to_string(first_a) + " and " + std::to_string(first_b) +
+         " are both at (" + at + ")" +
+         (pairs > 1 ? " (and " + std::to_string(pairs - 1) + " more pairs)" : std::string()) +
+         "; the cells on either side do not share them, so the mesh is not connected there "
+         "(merge coincident nodes, e.g. with Gmsh's Coherence Mesh)";
+}
+
 template <int Dim> std::string find_overlap(const Mesh &mesh) {
   constexpr int N = Dim + 1;
   const std::size_t nc = mesh.num_cells();
@@ -1306,8 +1336,13 @@ void prepare_input(Mesh &mesh, const std::string &path) {
     }
     if (!fr.overlap.empty())
       throw InputError(path, "tangled: " + fr.overlap);
-    if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
+    if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty()) {
+      // Coincident duplicate vertices (a mesh exported without merging
+      // nodes) look like hanging nodes; say what they are.
+      if (std::string d = find_duplicate_vertices(mesh); !d.empty())
+        throw InputError(path, d);
       throw InputError(path, "non-conforming input: " + s);
+    }
     if (std::string s = find_overlap<D>(mesh); !s.empty())
       throw InputError(path, "tangled: " + s);
     if (std::string s = find_fold<D>(mesh); !s.empty())
