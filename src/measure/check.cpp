@@ -11,6 +11,7 @@
 // against the vertices in its bounding box.
 #include "bisect/check.hpp"
 #include "core/dimension.hpp"
+#include "core/geometry.hpp"
 
 #include "bisect/measure.hpp"
 
@@ -37,8 +38,8 @@ constexpr int binomial(int n, int k) {
   return r;
 }
 
-// All K-subsets of {0..N-1} in lexicographic order. For K = N-1 (facets of a
-// cell with N vertices) subset m omits local vertex N-1-m.
+// All K-subsets of {0..N-1} in lexicographic order (for K = N-1, subset m
+// omits local vertex N-1-m; subsimplices() renumbers facets).
 template <int N, int K> constexpr std::array<std::array<int, K>, binomial(N, K)> combinations() {
   std::array<std::array<int, K>, binomial(N, K)> out{};
   std::array<int, K> c{};
@@ -58,9 +59,18 @@ template <int N, int K> constexpr std::array<std::array<int, K>, binomial(N, K)>
   return out;
 }
 
-template <int Dim> constexpr int opposite_of_facet(int m) {
-  return Dim - m;
+// The K-vertex sub-simplices of a cell, numbered so that for facets (K = N-1)
+// subset m omits local vertex m, as numbering.hpp numbers facets; other sizes
+// in lexicographic order.
+template <int N, int K> constexpr std::array<std::array<int, K>, binomial(N, K)> subsimplices() {
+  auto out = combinations<N, K>();
+  if constexpr (K == N - 1) // lexicographic subset m omits N-1-m: reverse
+    for (int m = 0; m < K / 2 + 1 && m < N - 1 - m; ++m)
+      std::swap(out[m], out[N - 1 - m]);
+  return out;
 }
+
+template <int Dim> constexpr int opposite_of_facet(int m) { return m; }
 
 template <int K> void sort_small(std::array<VertexId, K> &a) {
   for (int i = 1; i < K; ++i)
@@ -68,20 +78,6 @@ template <int K> void sort_small(std::array<VertexId, K> &a) {
       std::swap(a[j], a[j - 1]);
 }
 
-// Calls visit(key, refs, count) once per distinct K-vertex sub-simplex of the
-// cells, with `key` its sorted vertex ids and refs[0..count) the references
-// cell * M + m (M sub-simplices per cell, m in lexicographic subset order).
-// Sub-simplices come in increasing key order. With `signs` (per-cell
-// orientation; facets only, K == Dim) bit 31 of each reference is set when
-// the facet's opposite vertex lies on the positive side of the facet (see
-// facet_side), so the visitor never has to look the cell up again.
-//
-// Counting sort by smallest id, in chunks of consecutive smallest ids so the
-// buffer stays below kChunkBytes: each chunk scans the cells (sequentially)
-// and stores, per sub-simplex whose smallest id falls in the chunk, one
-// integer packing the other K-1 ids and the reference, high to low bits.
-// Sorting a bucket of those integers groups equal sub-simplices; the cells
-// are never visited in random order.
 constexpr std::size_t kChunkBytes = std::size_t(96) << 20;
 
 constexpr std::uint32_t kSideBit = std::uint32_t(1) << 31;
@@ -93,51 +89,67 @@ using UIntFor =
     std::conditional_t<Bits <= 32, std::uint32_t,
                        std::conditional_t<Bits <= 64, std::uint64_t, unsigned __int128>>;
 
-// SideOnly (facets, with `signs`, fewer than 2^31 vertices): refs[i] holds
-// only the side bit (kSideBit or 0), and the buffer packs the other ids in 31
-// bits each plus that bit: half the memory for tets (the final check).
-// WithRefs = false: only counts matter (refs is nullptr), the buffer holds the
-// K-1 ids alone.
-template <int Dim, int K, bool WithRefs = true, bool SideOnly = false, class Visit>
-void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
-                         const std::vector<std::int8_t> *signs = nullptr) {
+// The walk in pieces: the constructor counts the buckets; chunk [v0, v1)
+// fills `buffer` from one scan of the cells and visits its sub-simplices in
+// key order. Chunks are independent: several threads could walk different
+// chunks, each with its own buffer and visitor. (Tried for the final check
+// with 2 threads of half the buffer each: slower on this 2-core machine, as
+// every chunk rescans all cells.)
+template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
   static_assert(K >= 2 && K <= 4);
-  static constexpr auto subsets = combinations<Dim + 1, K>();
-  constexpr int M = int(subsets.size());
+  static constexpr auto subsets = subsimplices<Dim + 1, K>();
+  static constexpr int M = int(subsets.size());
   static_assert(!SideOnly || (WithRefs && K == Dim));
-  constexpr int kRefBits = SideOnly ? 1 : WithRefs ? 32 : 0;
-  constexpr int kIdBits = SideOnly ? 31 : 32;
+  static constexpr int kRefBits = SideOnly ? 1 : WithRefs ? 32 : 0;
+  static constexpr int kIdBits = SideOnly ? 31 : 32;
   using Packed = UIntFor<kIdBits * (K - 1) + kRefBits>;
-  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
-  if (nc * M >= std::size_t(kSideBit))
-    throw std::length_error("mesh too large for 32-bit sub-simplex references");
-  if (SideOnly && nv >= std::size_t(kSideBit))
-    throw std::length_error("mesh too large for 31-bit vertex ids");
-  auto min_of = [&](const VertexId *cell, int m) {
+
+  const Mesh &mesh;
+  const std::vector<std::int8_t> *signs;
+  std::vector<std::size_t> start; // start[v] .. start[v+1]: bucket of smallest id v
+
+  static VertexId min_of(const VertexId *cell, int m) {
     VertexId v = cell[subsets[m][0]];
     for (int i = 1; i < K; ++i)
       v = std::min(v, cell[subsets[m][i]]);
     return v;
-  };
-  // start[v] .. start[v+1]: bucket of smallest id v, over all chunks.
-  std::vector<std::size_t> start(nv + 1, 0);
-  for (std::size_t c = 0; c < nc; ++c)
-    for (int m = 0; m < M; ++m)
-      ++start[min_of(mesh.cell(CellId(c)), m) + 1];
-  for (std::size_t v = 1; v <= nv; ++v)
-    start[v] += start[v - 1];
+  }
 
-  const std::size_t cap = std::max<std::size_t>(kChunkBytes / sizeof(Packed), 1);
-  std::vector<Packed> buffer;
-  std::vector<std::size_t> cursor;
-  std::vector<std::uint32_t> group;
-  std::array<VertexId, K> key;
-  for (std::size_t v0 = 0; v0 < nv;) {
-    std::size_t v1 = v0 + 1; // the chunk is [v0, v1), at least one bucket
-    while (v1 < nv && start[v1 + 1] - start[v0] <= cap)
-      ++v1;
+  Walk(const Mesh &mesh_, const std::vector<std::int8_t> *signs_) : mesh(mesh_), signs(signs_) {
+    const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+    if (nc * M >= std::size_t(kSideBit))
+      throw std::length_error("mesh too large for 32-bit sub-simplex references");
+    if (SideOnly && nv >= std::size_t(kSideBit))
+      throw std::length_error("mesh too large for 31-bit vertex ids");
+    start.assign(nv + 1, 0);
+    for (std::size_t c = 0; c < nc; ++c)
+      for (int m = 0; m < M; ++m)
+        ++start[min_of(mesh.cell(CellId(c)), m) + 1];
+    for (std::size_t v = 1; v <= nv; ++v)
+      start[v] += start[v - 1];
+  }
+
+  // The chunks [v0, v1) of at most `cap` entries each (at least one bucket).
+  std::vector<std::pair<std::size_t, std::size_t>> chunks(std::size_t cap) const {
+    std::vector<std::pair<std::size_t, std::size_t>> out;
+    const std::size_t nv = mesh.num_vertices();
+    for (std::size_t v0 = 0; v0 < nv;) {
+      std::size_t v1 = v0 + 1;
+      while (v1 < nv && start[v1 + 1] - start[v0] <= cap)
+        ++v1;
+      out.emplace_back(v0, v1);
+      v0 = v1;
+    }
+    return out;
+  }
+
+  template <class Visit>
+  void chunk(std::size_t v0, std::size_t v1, std::vector<Packed> &buffer, Visit &&visit) const {
+    const std::size_t nc = mesh.num_cells();
+    std::vector<std::size_t> cursor(start.begin() + std::ptrdiff_t(v0), start.begin() + std::ptrdiff_t(v1));
+    std::vector<std::uint32_t> group;
+    std::array<VertexId, K> key;
     buffer.resize(start[v1] - start[v0]);
-    cursor.assign(start.begin() + v0, start.begin() + v1);
     for (std::size_t c = 0; c < nc; ++c) {
       const VertexId *cell = mesh.cell(CellId(c));
       for (int m = 0; m < M; ++m) {
@@ -163,8 +175,8 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
       }
     }
     for (std::size_t v = v0; v < v1; ++v) {
-      const auto first = buffer.begin() + (start[v] - start[v0]);
-      const auto last = buffer.begin() + (start[v + 1] - start[v0]);
+      const auto first = buffer.begin() + std::ptrdiff_t(start[v] - start[v0]);
+      const auto last = buffer.begin() + std::ptrdiff_t(start[v + 1] - start[v0]);
       std::sort(first, last);
       key[0] = VertexId(v);
       for (auto i = first; i != last;) {
@@ -182,8 +194,38 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
         i = j;
       }
     }
-    v0 = v1;
   }
+};
+
+// Calls visit(key, refs, count) once per distinct K-vertex sub-simplex of the
+// cells, with `key` its sorted vertex ids and refs[0..count) the references
+// cell * M + m (M sub-simplices per cell, numbered by subsimplices()).
+// Sub-simplices come in increasing key order. With `signs` (per-cell
+// orientation; facets only, K == Dim) bit 31 of each reference is set when
+// the facet's opposite vertex lies on the positive side of the facet (see
+// facet_side), so the visitor never has to look the cell up again.
+//
+// Counting sort by smallest id, in chunks of consecutive smallest ids so the
+// buffer stays below kChunkBytes: each chunk scans the cells (sequentially)
+// and stores, per sub-simplex whose smallest id falls in the chunk, one
+// integer packing the other K-1 ids and the reference, high to low bits.
+// Sorting a bucket of those integers groups equal sub-simplices; the cells
+// are never visited in random order.
+//
+// SideOnly (facets, with `signs`, fewer than 2^31 vertices): refs[i] holds
+// only the side bit (kSideBit or 0), and the buffer packs the other ids in 31
+// bits each plus that bit: half the memory for tets (the final check).
+// WithRefs = false: only counts matter (refs is nullptr), the buffer holds the
+// K-1 ids alone.
+template <int Dim, int K, bool WithRefs = true, bool SideOnly = false, class Visit>
+void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
+                         const std::vector<std::int8_t> *signs = nullptr) {
+  using W = Walk<Dim, K, WithRefs, SideOnly>;
+  const W walk(mesh, signs);
+  std::vector<typename W::Packed> buffer;
+  const std::size_t cap = std::max<std::size_t>(kChunkBytes / sizeof(typename W::Packed), 1);
+  for (const auto &[v0, v1] : walk.chunks(cap))
+    walk.chunk(v0, v1, buffer, visit);
 }
 
 template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
@@ -194,12 +236,7 @@ template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
 
 // ---- small geometry ---------------------------------------------------------
 
-template <int Dim> double squared_distance(const double *p, const double *q) {
-  double s = 0;
-  for (int i = 0; i < Dim; ++i)
-    s += (p[i] - q[i]) * (p[i] - q[i]);
-  return s;
-}
+using geometry::squared_distance;
 
 
 // Solves the n x n system G x = b (n <= 4) by elimination with pivoting;
@@ -389,48 +426,54 @@ template <int Dim> int facet_side(const VertexId *cell, int m, int cell_sign) {
 // the two opposite vertices lie on opposite sides of the facet's hyperplane.
 // SideOnly (needs `signs` without degenerate cells): the lighter walk of the
 // final check; an overlap is reported by its facet only.
+// The facet visitor of facet_pass, accumulating into `r`.
+template <int Dim, bool SideOnly> struct FacetVisitor {
+  const Mesh &mesh;
+  const std::vector<std::int8_t> *signs;
+  bool keep_boundary;
+  FacetReport &r;
+  void operator()(const std::array<VertexId, Dim> &key, const std::uint32_t *refs, int count) {
+    constexpr int M = Dim + 1;
+    ++r.facets;
+    if (count == 1) {
+      ++r.boundary_facets;
+      double pts[Dim * Dim];
+      gather<Dim>(mesh, key.data(), Dim, pts);
+      const double measure = facet_measure<Dim>(pts);
+      r.boundary_measure += measure;
+      r.smallest_boundary_facet = std::min(r.smallest_boundary_facet, measure);
+      if (keep_boundary)
+        r.boundary.insert(r.boundary.end(), key.begin(), key.end());
+    } else if (count == 2) {
+      if (!signs || !r.overlap.empty())
+        return;
+      if constexpr (SideOnly) {
+        if (refs[0] == refs[1])
+          r.overlap = "two cells overlap across facet " + id_list(key);
+        return;
+      }
+      const CellId cells[2] = {CellId((refs[0] & ~kSideBit) / M), CellId((refs[1] & ~kSideBit) / M)};
+      // Degenerate cells (sign 0) are reported before this pass; skip them.
+      if ((*signs)[cells[0]] == 0 || (*signs)[cells[1]] == 0)
+        return;
+      if ((refs[0] & kSideBit) == (refs[1] & kSideBit))
+        r.overlap = "cells " + std::to_string(cells[0]) + " and " + std::to_string(cells[1]) +
+                    " overlap across facet " + id_list(key);
+    } else if (r.nonmanifold.empty()) {
+      r.nonmanifold = "facet " + id_list(key) + " is shared by " + std::to_string(count) + " cells";
+    }
+  }
+};
+
 template <int Dim, bool SideOnly = false>
 FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs,
                        bool keep_boundary) {
-  constexpr int M = Dim + 1;
   FacetReport r;
-  double pts[Dim * Dim];
-  for_each_subsimplex<Dim, Dim, true, SideOnly>(
-      mesh,
-      [&](const std::array<VertexId, Dim> &key, const std::uint32_t *refs, int count) {
-        ++r.facets;
-        if (count == 1) {
-          ++r.boundary_facets;
-          gather<Dim>(mesh, key.data(), Dim, pts);
-          const double measure = facet_measure<Dim>(pts);
-          r.boundary_measure += measure;
-          r.smallest_boundary_facet = std::min(r.smallest_boundary_facet, measure);
-          if (keep_boundary)
-            r.boundary.insert(r.boundary.end(), key.begin(), key.end());
-        } else if (count == 2) {
-          if (!signs || !r.overlap.empty())
-            return;
-          if constexpr (SideOnly) {
-            if (refs[0] == refs[1])
-              r.overlap = "two cells overlap across facet " + id_list(key);
-            return;
-          }
-          const CellId cells[2] = {CellId((refs[0] & ~kSideBit) / M),
-                                   CellId((refs[1] & ~kSideBit) / M)};
-          // Degenerate cells (sign 0) are reported before this pass; skip them.
-          if ((*signs)[cells[0]] == 0 || (*signs)[cells[1]] == 0)
-            return;
-          if ((refs[0] & kSideBit) == (refs[1] & kSideBit))
-            r.overlap = "cells " + std::to_string(cells[0]) + " and " + std::to_string(cells[1]) +
-                        " overlap across facet " + id_list(key);
-        } else if (r.nonmanifold.empty()) {
-          r.nonmanifold =
-              "facet " + id_list(key) + " is shared by " + std::to_string(count) + " cells";
-        }
-      },
-      signs);
+  for_each_subsimplex<Dim, Dim, true, SideOnly>(mesh, FacetVisitor<Dim, SideOnly>{mesh, signs, keep_boundary, r},
+                                                signs);
   return r;
 }
+
 
 // First cell with an id out of range, e.g. "cell 5 refers to vertex 99, but
 // there are only 12 vertices"; empty when all ids are valid.
@@ -674,6 +717,36 @@ std::string find_hanging_node(const Mesh &mesh, const std::vector<VertexId> &bnd
 // in the grid cells its bounding box covers. Not a proof of validity (two
 // thin crossing cells may keep their centroids apart), but cheap and exact in
 // what it reports.
+// Two vertices used by cells at exactly the same coordinates, as one line
+// naming them (empty when there are none). O(n log n); run only to explain a
+// failed check.
+std::string find_duplicate_vertices(const Mesh &mesh) {
+  std::vector<char> used(mesh.num_vertices(), 0);
+  for (VertexId v : mesh.cells) used[v] = 1;
+  std::vector<VertexId> order;
+  for (std::size_t v = 0; v < used.size(); ++v)
+    if (used[v]) order.push_back(VertexId(v));
+  const int d = mesh.dim;
+  auto less = [&](VertexId a, VertexId b) {
+    return std::lexicographical_compare(mesh.point(a), mesh.point(a) + d, mesh.point(b), mesh.point(b) + d);
+  };
+  std::sort(order.begin(), order.end(), [&](VertexId a, VertexId b) { return less(a, b) || (!less(b, a) && a < b); });
+  std::size_t pairs = 0;
+  VertexId first_a = 0, first_b = 0;
+  for (std::size_t i = 1; i < order.size(); ++i)
+    if (std::equal(mesh.point(order[i]), mesh.point(order[i]) + d, mesh.point(order[i - 1]))) {
+      if (pairs++ == 0) first_a = order[i - 1], first_b = order[i];
+    }
+  if (pairs == 0) return {};
+  std::string at;
+  for (int k = 0; k < d; ++k) at += (k ? ", " : "") + format("%.17g", mesh.point(first_a)[k], 0, 0);
+  return "duplicate vertices: " + std::to_string(first_a) + " and " + std::to_string(first_b) +
+         " are both at (" + at + ")" +
+         (pairs > 1 ? " (and " + std::to_string(pairs - 1) + " more pairs)" : std::string()) +
+         "; the cells on either side do not share them, so the mesh is not connected there "
+         "(merge coincident nodes, e.g. with Gmsh's Coherence Mesh)";
+}
+
 template <int Dim> std::string find_overlap(const Mesh &mesh) {
   constexpr int N = Dim + 1;
   const std::size_t nc = mesh.num_cells();
@@ -1113,7 +1186,7 @@ template <int Dim> std::string find_fold(const Mesh &mesh) {
     }
     return {};
   } else {
-    static constexpr auto subsets = combinations<N, Dim - 1>();
+    static constexpr auto subsets = subsimplices<N, Dim - 1>();
     constexpr int M = int(subsets.size());
     std::string found;
     for_each_subsimplex<Dim, Dim - 1>(
@@ -1301,8 +1374,13 @@ void prepare_input(Mesh &mesh, const std::string &path) {
     }
     if (!fr.overlap.empty())
       throw InputError(path, "tangled: " + fr.overlap);
-    if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
+    if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty()) {
+      // Coincident duplicate vertices (a mesh exported without merging
+      // nodes) look like hanging nodes; say what they are.
+      if (std::string d = find_duplicate_vertices(mesh); !d.empty())
+        throw InputError(path, d);
       throw InputError(path, "non-conforming input: " + s);
+    }
     if (std::string s = find_overlap<D>(mesh); !s.empty())
       throw InputError(path, "tangled: " + s);
     if (std::string s = find_fold<D>(mesh); !s.empty())

@@ -55,3 +55,12 @@ print(f"{path}: {cells} cells, types {sorted(types)}, {len(names)} cell arrays")
 PY
 done
 echo "vtk_readers: ok"
+# And a picture: VTK renders the 2D, 3D and section outputs offscreen
+# (xvfb-run, as in a headless ParaView) into non-blank PNGs.
+command -v xvfb-run >/dev/null || fail "xvfb-run is missing (scripts/install-deps.sh installs xvfb)"
+for f in 2d-zlib.vtu 3d-zlib.vtu 4d-zlib.t0.5.vtu; do
+  timeout 120 xvfb-run -a /usr/bin/python3 "$ROOT/tests/support/render_vtu.py" "$f" "${f%.vtu}.png" \
+    >render.log 2>&1 || { cat render.log >&2; fail "$f: VTK could not render it"; }
+  [[ -s ${f%.vtu}.png ]] || fail "$f: no PNG"
+done
+echo "vtk_readers: VTK reads every output and renders 2D, 3D and a section to PNG"
