@@ -65,6 +65,7 @@ void encode_state(Mesh &mesh) {
       }
       set_array(mesh.cell_data, std::move(rank));
     }
+    encode_tree(mesh);
   }
 }
 
@@ -80,13 +81,17 @@ void strip_state(Mesh &mesh) {
     return a.name == kOrderArray || a.name == kStageArray || a.name == kTagArray ||
            a.name == kMarkingArray || a.name == kEdgeRankArray;
   });
+  strip_tree(mesh);
 }
 
 bool decode_state(Mesh &mesh, const std::string &path) {
   int io = find_array(mesh.cell_data, kOrderArray), is = find_array(mesh.cell_data, kStageArray),
       it = find_array(mesh.cell_data, kTagArray), im = find_array(mesh.cell_data, kMarkingArray);
   int present = (io >= 0) + (is >= 0) + (it >= 0) + (im >= 0);
-  if (present == 0) return false;
+  if (present == 0) {
+    strip_tree(mesh); // a tree without the state it belongs to means nothing
+    return false;
+  }
   if (present != 4)
     throw InputError(path, std::string("bisection state is incomplete: expected cell arrays ") +
                                kOrderArray + ", " + kStageArray + ", " + kTagArray + ", " +
@@ -164,6 +169,7 @@ bool decode_state(Mesh &mesh, const std::string &path) {
   for (int i : {io, is, it, im, ir})
     if (i >= 0) mesh.cell_data[i].name.clear();
   std::erase_if(mesh.cell_data, [](const DataArray &a) { return a.name.empty(); });
+  decode_tree(mesh, path);
   return true;
 }
 
