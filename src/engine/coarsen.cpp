@@ -30,8 +30,6 @@
 #include "core/numbering.hpp"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <unordered_set>
 
 namespace bisect {
@@ -226,6 +224,18 @@ private:
     }
   }
 
+  // A Maubach cell with tag n made by bisection is (h, z, ...) with h an end
+  // of z's parent edge. An earlier merge may have stored its reflection (the
+  // whole tuple reversed, §1: the same descendants, since the children of a
+  // tag-1 cell do not tell it from its reflection), which puts z at n-1;
+  // turn it back so that z is at 1 where the undo rule looks for it.
+  void orient(VertexId *x) const {
+    auto holds = [&](VertexId z, VertexId h) {
+      return m_.parent_edge[2 * std::size_t(z)] == h || m_.parent_edge[2 * std::size_t(z) + 1] == h;
+    };
+    if (!holds(x[1], x[0]) && holds(x[Dim - 1], x[Dim])) std::reverse(x, x + N);
+  }
+
   // The merges of this pass: for every created vertex whose star is all
   // marked children of its bisection, pairs of siblings.
   void find_merges() {
@@ -239,6 +249,7 @@ private:
       const VertexId *x = m_.cell(CellId(c));
       for (int i = 0; i < N; ++i) ++degree[x[i]];
       if (!marks_[c] || m_.generation[c] == 0) continue;
+      if (m_.stage[c] == Stage::Maubach && m_.tag[c] == Dim) orient(m_.cell(CellId(c)));
       const int k = new_vertex_index(m_.stage[c], m_.tag[c]);
       if (k >= 0 && m_.parent_edge[2 * std::size_t(x[k])] != kNoVertex) ++children[x[k]];
     }
@@ -292,15 +303,6 @@ private:
             ok = pair_maubach(z, a, b, star, k, i, paired, found) ||
                  pair_stage1(z, a, b, star, k, i, paired, found);
         }
-      }
-      if (!ok && std::getenv("BISECT_COARSEN_DEBUG")) {
-        std::fprintf(stderr, "z %u (%u %u) k %zu fails:", z, a, b, k);
-        for (std::size_t i = 0; i < k; ++i) {
-          const VertexId *x = m_.cell(star[i]);
-          std::fprintf(stderr, "\n  %s s%d t%d g%d:", paired[i] ? "P" : "-", int(m_.stage[star[i]]), int(m_.tag[star[i]]), int(m_.generation[star[i]]));
-          for (int j = 0; j < N; ++j) std::fprintf(stderr, " %u", x[j]);
-        }
-        std::fprintf(stderr, "\n");
       }
       if (!ok) continue;
       merges_.insert(merges_.end(), found.begin(), found.end());
@@ -405,7 +407,7 @@ private:
   std::vector<Merge> merges_;
   std::vector<char> removed_; // per vertex, this pass
   std::size_t removed_count_ = 0;
-  mutable bool exact_ = true; // the matching try_parent uses (same_cell)
+  bool exact_ = true; // the matching try_parent uses (same_cell)
 };
 
 } // namespace
