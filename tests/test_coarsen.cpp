@@ -193,18 +193,6 @@ TEST_CASE("coarsen: passes until none removes anything after N local refinements
   }
 }
 
-TEST_CASE("coarsen: consistently tagged 4D (extruded) comes back in N passes", "[coarsen][4d]") {
-  for (int n = 1; n <= 3; ++n) {
-    Mesh input = extruded_input(3);
-    Mesh m = input;
-    refine_locally(m, n);
-    const CoarsenResult r = coarsen_all(m, n);
-    INFO(n << " iterations, " << r.passes << " passes");
-    REQUIRE(r.passes == n);
-    REQUIRE(cell_shapes(m) == cell_shapes(input));
-  }
-}
-
 TEST_CASE("coarsen: a cycle of reused midpoints stalls full coarsening, conformingly",
           "[coarsen][3d]") {
   // 3D longest marking, seed 1, 3 iterations: around vertex 35 seven

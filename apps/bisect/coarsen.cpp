@@ -76,6 +76,7 @@ int run_coarsen(const CoarsenArgs &a) {
   Mesh mesh = load_mesh(a.input);
   check_output_format(out, mesh.dim);
   const std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
+  const std::vector<char> marks = marked_cells(mesh, a);
   if (!quiet) {
     std::cerr << "bisect: " << a.input << ": " << mesh.dim << "D, " << with_commas(cells0)
               << " cells, " << with_commas(verts0) << " vertices\n";
@@ -84,7 +85,6 @@ int run_coarsen(const CoarsenArgs &a) {
                 << " carries no bisection tree (bisect:generation, bisect:parent_a/b): "
                    "nothing to coarsen\n";
   }
-  const std::vector<char> marks = marked_cells(mesh, a);
   const Invariants before = measure_invariants(mesh, a.check);
 
   CoarsenOptions options;
@@ -94,8 +94,8 @@ int run_coarsen(const CoarsenArgs &a) {
   auto on_pass = [&](const CoarsenPass &p) {
     if (!quiet) {
       char buf[256];
-      std::snprintf(buf, sizeof buf, "pass %d/%d: %s cells, %s vertices removed, %.2f s\n", p.pass,
-                    a.passes, with_commas(p.cells).c_str(),
+      std::snprintf(buf, sizeof buf, "pass %d%s: %s cells, %s vertices removed, %.2f s\n", p.pass,
+                    a.passes ? ("/" + std::to_string(a.passes)).c_str() : "", with_commas(p.cells).c_str(),
                     with_commas(p.removed_vertices).c_str(), seconds_since(t_pass));
       std::cerr << buf;
     }
@@ -160,8 +160,11 @@ Command add_coarsen(CLI::App &app) {
   auto *all = cmd->add_flag("--all", a->all, "Mark every cell");
   ind->excludes(reg)->excludes(all);
   reg->excludes(all);
-  cmd->add_option("--passes,-n", a->passes, "Coarsening passes (default 1)")
-      ->check(CLI::Range(1, 100000));
+  cmd->add_option("--passes,-n", a->passes,
+                  "Coarsening passes (default 1; 0: until a pass removes nothing). A pass "
+                  "undoes one level of the bisection tree, which can take more passes than "
+                  "refinement took iterations")
+      ->check(CLI::Range(0, 100000));
   cmd->add_option("--sum", a->sums, "Cell array whose parent value is the children's sum "
                                     "(repeatable)");
   cmd->add_option("--output,-o", a->output,
