@@ -28,7 +28,8 @@ inline constexpr const char *kGenerationArray = "bisect:generation";
 inline constexpr const char *kParentAArray = "bisect:parent_a";
 inline constexpr const char *kParentBArray = "bisect:parent_b";
 
-// Adds the tree arrays when the mesh has a tree (nothing otherwise).
+// Adds the tree arrays when the mesh has a tree; otherwise removes any
+// (e.g. copied from another mesh's point data by a tool).
 void encode_tree(Mesh &mesh);
 // Moves the tree arrays, when present, into mesh.generation and
 // mesh.parent_edge and removes them from the data; without them the mesh has

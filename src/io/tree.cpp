@@ -48,7 +48,10 @@ void check_integers(const DataArray &a, std::size_t count, double lo, double hi,
 } // namespace
 
 void encode_tree(Mesh &mesh) {
-  if (!mesh.has_tree()) return;
+  if (!mesh.has_tree()) {
+    strip_tree(mesh); // arrays a tool copied from another mesh are not this one's tree
+    return;
+  }
   const std::size_t nc = mesh.num_cells(), nv = mesh.num_vertices();
   DataArray generation{kGenerationArray, 1, std::vector<double>(nc)};
   for (std::size_t c = 0; c < nc; ++c) generation.values[c] = mesh.generation[c];
