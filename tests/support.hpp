@@ -3,6 +3,7 @@
 
 #include "bisect/check.hpp"
 #include "bisect/mesh.hpp"
+#include "bisect/state.hpp"
 
 #include <algorithm>
 #include <cstdint>
@@ -72,6 +73,29 @@ inline Mesh perturbed_inside_box(const Mesh &in, double amount, std::uint64_t se
     for (int k = 0; k < d; ++k) m.coords[v * d + k] += u(rng);
   }
   return m;
+}
+
+// Rewrites an encoded mesh's bisect:state as the older arrays bisect:order,
+// bisect:stage and bisect:tag, which files written before 0.2 carry (still
+// read): the tests of that path tamper with them.
+inline void to_legacy_state(Mesh &m) {
+  auto it = std::find_if(m.cell_data.begin(), m.cell_data.end(),
+                         [](const DataArray &a) { return a.name == kStateArray; });
+  if (it == m.cell_data.end()) return;
+  const int nv = m.dim + 1;
+  DataArray order{kOrderArray, nv, {}}, stage{kStageArray, 1, {}}, tag{kTagArray, 1, {}};
+  for (double v : it->values) {
+    const int w = int(v);
+    int p[5];
+    permutation_of_rank(w >> 4, nv, p);
+    for (int i = 0; i < nv; ++i) order.values.push_back(p[i]);
+    stage.values.push_back((w >> 3) & 1);
+    tag.values.push_back(w & 7);
+  }
+  m.cell_data.erase(it);
+  m.cell_data.push_back(std::move(order));
+  m.cell_data.push_back(std::move(stage));
+  m.cell_data.push_back(std::move(tag));
 }
 
 } // namespace bisect::testing

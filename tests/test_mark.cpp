@@ -127,6 +127,7 @@ TEST_CASE("state arrays that are not a permutation are rejected", "[mark][io]") 
   Mesh m = generate_kuhn(2, 1);
   mark_mesh(m, Marking::Index);
   encode_state(m);
+  testing::to_legacy_state(m);
   for (DataArray &a : m.cell_data)
     if (a.name == kOrderArray) a.values[1] = a.values[0];
   REQUIRE_THROWS_WITH(decode_state(m, "in.vtu"), Catch::Contains("in.vtu") && Catch::Contains("permutation"));

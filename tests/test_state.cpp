@@ -109,6 +109,21 @@ TEST_CASE("state: an extruded space-time mesh and a forced type are accepted", "
 TEST_CASE("state: values out of range are rejected, naming the cell", "[state][io]") {
   Mesh base = refined(3, Marking::Longest, 1, 3);
   encode_state(base);
+  {
+    // bisect:state: a vertex order beyond the 24 permutations, a fraction, NaN, a negative.
+    for (double bad : {24.0 * 16, 3.5, double(NAN), -16.0}) {
+      Mesh m = base;
+      array_named(m, kStateArray).values[5] = bad;
+      INFO("bisect:state = " << bad);
+      REQUIRE_THROWS_WITH(reload(m), Catch::Contains("in.vtu") && Catch::Contains("cell 5") &&
+                                         Catch::Contains(kStateArray));
+    }
+    // A Maubach tag 0 (stage bit set, tag bits 0).
+    Mesh m = base;
+    array_named(m, kStateArray).values[5] = 8;
+    REQUIRE_THROWS_WITH(reload(m), Catch::Contains("cell 5") && Catch::Contains("tag"));
+  }
+  testing::to_legacy_state(base);
   struct Case {
     const char *array;
     double value;
@@ -137,12 +152,21 @@ TEST_CASE("state: tampered order or connectivity is rejected or still refines co
     for (Marking marking : {Marking::Index, Marking::Longest, Marking::Sorted}) {
       Mesh base = refined(dim, marking, 2, 11);
       encode_state(base);
+      if (marking != Marking::Sorted) testing::to_legacy_state(base); // both encodings
       const int nv = dim + 1;
       for (int trial = 0; trial < 12; ++trial) {
         Mesh m = base;
         const std::size_t c = std::uniform_int_distribution<std::size_t>(0, m.num_cells() - 1)(rng);
         const bool permute_order = trial % 2 == 0;
-        if (permute_order) {
+        if (permute_order && marking == Marking::Sorted) {
+          // bisect:state: another vertex order (rank), same stage and tag.
+          double &v = array_named(m, kStateArray).values[c];
+          int nperm = 1;
+          for (int f = 2; f <= nv; ++f) nperm *= f;
+          const int w = int(v), r = w >> 4;
+          const int r2 = (r + 1 + std::uniform_int_distribution<int>(0, nperm - 2)(rng)) % nperm;
+          v = double(r2 * 16 + (w & 15));
+        } else if (permute_order) {
           DataArray &order = array_named(m, kOrderArray);
           auto first = order.values.begin() + std::ptrdiff_t(c * nv);
           std::vector<double> before(first, first + nv);

@@ -34,28 +34,9 @@ std::vector<char> marked_cells(const Mesh &mesh, const CoarsenArgs &a) {
     auto region = read_region(a.region, mesh.dim);
     for (CellId c : select_cells(mesh, *region)) marks[c] = 1;
   } else {
-    auto find = [&](const std::vector<DataArray> &arrays) -> const DataArray * {
-      for (const DataArray &d : arrays)
-        if (d.name == a.indicator) return &d;
-      return nullptr;
-    };
-    const DataArray *cell = find(mesh.cell_data), *point = find(mesh.point_data);
-    const DataArray *d = cell ? cell : point;
-    if (!d)
-      throw InputError(a.input, "no cell or point array named '" + a.indicator + "' (--indicator)");
-    if (d->components != 1)
-      throw InputError(a.input, "the indicator '" + a.indicator + "' has " +
-                                    std::to_string(d->components) + " components; expected 1");
-    for (std::size_t c = 0; c < nc; ++c) {
-      double value = -INFINITY;
-      if (cell) {
-        value = cell->values[c];
-      } else {
-        const VertexId *x = mesh.cell(CellId(c));
-        for (int i = 0; i < mesh.cell_size(); ++i) value = std::max(value, point->values[x[i]]);
-      }
-      marks[c] = value < a.below;
-    }
+    // A cell array, or a point array (a cell takes its vertices' max).
+    const std::vector<double> values = cell_indicator(mesh, a.indicator, a.input);
+    for (CellId c : mark_by_indicator(values, IndicatorRule::Below, a.below, a.input)) marks[c] = 1;
   }
   return marks;
 }

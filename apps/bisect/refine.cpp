@@ -1,7 +1,9 @@
 // bisect refine: read, refine iteration after iteration, check, write.
 #include "cli.hpp"
 
+#include <algorithm>
 #include <cstdio>
+#include <iterator>
 #include <cstdlib>
 #include <filesystem>
 #include <iomanip>
@@ -22,6 +24,10 @@ namespace {
 struct RefineArgs {
   std::string input, region, output, csv, format, compression = "zlib";
   int iterations = 1;
+  // Marking by an indicator (one of above/top/dorfler), and its depth.
+  std::string indicator;
+  std::optional<double> above, top, dorfler;
+  int depth = 1;
   std::string marking;
   std::int64_t max_elements = 0;
   double max_memory_gib = 0;
@@ -47,6 +53,16 @@ struct StageSeconds {
 int run_refine(const RefineArgs &a) {
   const auto t_start = std::chrono::steady_clock::now();
   const bool quiet = a.flags.quiet;
+  if (a.region.empty() && a.indicator.empty())
+    throw UsageError("refine needs --region SPEC or --indicator NAME (or both)");
+  const int rules = a.above.has_value() + a.top.has_value() + a.dorfler.has_value();
+  if (!a.indicator.empty() && rules != 1)
+    throw UsageError("--indicator needs exactly one of --above X, --top F, --dorfler THETA");
+  if (a.indicator.empty() && rules)
+    throw UsageError("--above, --top and --dorfler need --indicator NAME");
+  if (!a.indicator.empty() && a.iterations != 1)
+    throw UsageError("--iterations with --indicator: the indicator belongs to the input's cells, "
+                     "so it marks one iteration; run refine again with a new indicator");
   std::optional<Marking> marking;
   if (!a.marking.empty()) marking = parse_marking(a.marking);
   std::string out = a.output.empty() ? default_output(a.input) : a.output;
@@ -59,7 +75,9 @@ int run_refine(const RefineArgs &a) {
   const std::string csv = !a.csv.empty() ? a.csv : a.output == "-" ? "none" : default_csv(out);
   if (a.format.empty()) check_extension(out);
   // Every output is checked before any work and written as one transaction.
-  OutputSet outputs({a.input, a.region}, a.force);
+  std::vector<std::string> inputs{a.input};
+  if (!a.region.empty()) inputs.push_back(a.region);
+  OutputSet outputs(inputs, a.force);
   const int h_mesh = outputs.add(out);
   const int h_csv = csv == "none" ? -1 : outputs.add(csv);
   std::vector<int> h_slices;
@@ -83,7 +101,26 @@ int run_refine(const RefineArgs &a) {
   check_output_format(out, mesh.dim, a.format);
   if (!a.slices.empty() && mesh.dim < 3)
     throw UsageError("--slices needs a 3D (2D+t) or 4D mesh; " + a.input + " is 2D");
-  auto region = read_region(a.region, mesh.dim);
+  std::unique_ptr<Region> region;
+  if (!a.region.empty()) region = read_region(a.region, mesh.dim);
+  // The cells the indicator marks, in the input's numbering (one iteration).
+  std::vector<CellId> by_indicator;
+  if (!a.indicator.empty()) {
+    const std::vector<double> values = cell_indicator(mesh, a.indicator, a.input);
+    const IndicatorRule rule = a.above ? IndicatorRule::Above
+                               : a.top ? IndicatorRule::Top
+                                       : IndicatorRule::Dorfler;
+    by_indicator = mark_by_indicator(values, rule, a.above ? *a.above : a.top ? *a.top : *a.dorfler,
+                                     a.input);
+  }
+  Selector select = [&](const Mesh &m) {
+    if (a.indicator.empty()) return select_cells(m, *region);
+    if (!region) return by_indicator;
+    std::vector<CellId> both = select_cells(m, *region), out;
+    std::set_union(both.begin(), both.end(), by_indicator.begin(), by_indicator.end(),
+                   std::back_inserter(out));
+    return out;
+  };
 
   std::ostringstream rows;
   rows << "iteration,cells,vertices,selected,bisections,min_quality,max_quality,mean_quality,seconds\n";
@@ -102,6 +139,7 @@ int run_refine(const RefineArgs &a) {
 
   DriverOptions options;
   options.iterations = a.iterations;
+  options.depth = a.depth;
   options.max_cells = std::size_t(a.max_elements);
   options.max_memory_gib = a.max_memory_gib;
   // --check (always on in a BISECT_PARANOID build): the full conformity check
@@ -111,7 +149,9 @@ int run_refine(const RefineArgs &a) {
 #else
   options.check_every_iteration = a.check;
 #endif
+  std::size_t selected_total = 0;
   auto on_iteration = [&](const IterationReport &r, Mesh &m) {
+    selected_total += r.selected;
     row(r.iteration, r.selected, r.bisections, r.quality, r.seconds);
     if (!quiet) {
       char buf[320];
@@ -128,7 +168,7 @@ int run_refine(const RefineArgs &a) {
   };
   DriverResult result;
   try {
-    result = run_iterations(mesh, region_selector(*region), options, on_iteration);
+    result = run_iterations(mesh, select, options, on_iteration);
   } catch (const CheckError &e) {
     std::cerr << "bisect: internal check failed " << e.what() << "; no output written\n";
     return kExitCheck;
@@ -140,7 +180,8 @@ int run_refine(const RefineArgs &a) {
   if (!quiet) {
     if (!result.stop_message.empty()) std::cerr << "bisect: " << result.stop_message << "\n";
     if (result.stop == StopReason::NothingSelected)
-      std::cerr << "bisect: the region touches no cell; nothing more to refine\n";
+      std::cerr << (a.indicator.empty() ? "bisect: the region touches no cell; nothing more to refine\n"
+                                        : "bisect: nothing is marked; the mesh is written unchanged\n");
   }
   const QualitySummary q = result.quality;
 
@@ -172,6 +213,7 @@ int run_refine(const RefineArgs &a) {
     j["cells"] = mesh.num_cells();
     j["vertices"] = mesh.num_vertices();
     j["bisections"] = result.bisections;
+    j["selected"] = selected_total;
     j["min_quality"] = q.min;
     j["max_quality"] = q.max;
     j["mean_quality"] = q.mean;
@@ -196,9 +238,11 @@ int run_refine(const RefineArgs &a) {
 Command add_refine(CLI::App &app) {
   auto a = std::make_shared<RefineArgs>();
   auto *cmd = app.add_subcommand(
-      "refine", "Refine a mesh locally around a region, iteration after iteration, to conformity.");
+      "refine", "Refine a mesh locally around a region (iteration after iteration) or where a "
+                "solver's error indicator marks it, to conformity.");
   cmd->footer("Example: bisect refine data/ball.msh --region data/regions/hemisphere.json "
                      "--iterations 10 -o ball-10.vtu\n"
+                     "         bisect refine mesh.vtu --indicator eta --dorfler 0.5 -o next.vtu\n"
                      "Writes the mesh (.vtu or .msh by extension, with the bisection state as "
                      "cell arrays bisect:*, so refining the output continues the same sequence) "
                      "and a CSV with one row per iteration. A file's bisection state is checked on "
@@ -212,8 +256,24 @@ Command add_refine(CLI::App &app) {
                      std::string(kExitCodesHelp));
   cmd->add_option("input", a->input, "Input mesh (.vtu or .msh)")->required();
   cmd->add_option("--region,-r", a->region, "Region spec (JSON): sphere, hemisphere, box, "
-                                                  "halfspace, moving_sphere, levelset, union, intersection")
-      ->required();
+                                             "halfspace, moving_sphere, levelset, union, intersection");
+  cmd->add_option("--indicator", a->indicator,
+                  "Mark cells by this one-component cell array of the input (a point array: a "
+                  "cell's value is the largest of its vertices'), with --above, --top or --dorfler; "
+                  "with --region too, a cell is refined when either marks it");
+  auto *above = cmd->add_option("--above", a->above, "--indicator: the cells whose value is greater than X");
+  auto *top = cmd->add_option("--top", a->top,
+                              "--indicator: the ceil(F * cells) cells with the largest values (0 < F <= 1)");
+  auto *dorfler = cmd->add_option(
+      "--dorfler", a->dorfler,
+      "--indicator: Dorfler's bulk criterion: the fewest cells, largest values first, whose sum of "
+      "squared values reaches THETA times the total (0 < THETA <= 1, values >= 0)");
+  above->excludes(top)->excludes(dorfler);
+  top->excludes(dorfler);
+  cmd->add_option("--depth", a->depth,
+                  "Bisect each marked cell K times (its descendants inside it), then refine to "
+                  "conformity (default 1; K = dimension halves the marked cells' size)")
+      ->check(CLI::Range(1, 64));
   cmd->add_option("--iterations,-n", a->iterations, "Refinement iterations (default 1)")
       ->check(CLI::Range(0, 10000));
   cmd->add_option("--output,-o", a->output,

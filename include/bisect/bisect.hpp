@@ -18,6 +18,7 @@
 #include "bisect/error.hpp"    // bisect::Error and its kinds
 #include "bisect/extrude.hpp"  // space-time extrusion (tools)
 #include "bisect/generate.hpp" // simplices and Kuhn cubes (tools)
+#include "bisect/indicator.hpp" // marking by an error indicator
 #include "bisect/io.hpp"       // .vtu and .msh, load_mesh / save_mesh
 #include "bisect/mark.hpp"     // marking: global edge orders, ensure_marked
 #include "bisect/measure.hpp"  // volumes, quality, similarity classes

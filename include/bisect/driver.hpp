@@ -21,6 +21,7 @@ using Selector = std::function<std::vector<CellId>(const Mesh &)>;
 
 struct DriverOptions {
   int iterations = 1;
+  int depth = 1;              // bisections of each selected cell per iteration (refine_marked)
   std::size_t max_cells = 0;  // stop before an iteration would pass it; 0: none
   double max_memory_gib = 0;  // stop before an iteration estimated to need more
                               // than this in all; 0: more than is available now

@@ -41,11 +41,38 @@ inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
   return std::uint64_t(a) << 32 | b;
 }
 
+// The type an array has in files. Values are held as doubles (exact for
+// every integer up to 2^53), and written back in this type. Integer point
+// arrays are labels: refinement gives a new vertex the value both ends of its
+// edge share, else label_sentinel(type). Unknown (arrays a format does not
+// type, e.g. Gmsh's $ElementData, or made in memory): cell arrays whose
+// values are all 32-bit integers are written as Int32, the rest as Float64.
+enum class ValueType : std::uint8_t {
+  Unknown, Float32, Float64, Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64
+};
+inline bool is_integer_type(ValueType t) { return t >= ValueType::Int8; }
+inline bool is_unsigned_type(ValueType t) {
+  return t == ValueType::UInt8 || t == ValueType::UInt16 || t == ValueType::UInt32 ||
+         t == ValueType::UInt64;
+}
+// -1 for signed integer types (and label arrays of unknown type), the largest
+// value for unsigned ones.
+inline double label_sentinel(ValueType t) {
+  switch (t) {
+  case ValueType::UInt8: return 255.0;
+  case ValueType::UInt16: return 65535.0;
+  case ValueType::UInt32: return 4294967295.0;
+  case ValueType::UInt64: return 18446744073709551615.0;
+  default: return -1.0;
+  }
+}
+
 // A named array attached to points or cells; `components` values per entity.
 struct DataArray {
   std::string name;
   int components = 1;
   std::vector<double> values;
+  ValueType type = ValueType::Unknown;
 };
 
 // Point arrays that label vertices rather than sample a field: `colour` (the

@@ -7,7 +7,24 @@
 
 namespace bisect {
 
-// Names of the cell arrays that carry the state in files.
+// Names of the cell arrays that carry the state in files: one-component
+// integers, so that every converter carries them (meshio to XDMF, Gmsh 2.2).
+//  bisect:state = 16 * r + 8 * stage + tag, where r is the rank, among the
+//    (dim+1)! permutations in lexicographic order, of the permutation p with
+//    tuple[i] = cell[p[i]] (0: the stored vertex order is the tuple; bisect
+//    writes 0 or, for a cell it swapped to orient it positively, the rank of
+//    (1, 0, 2, ...)); stage 0 Stage 1 (Opposite), 1 Maubach; tag as in mesh.hpp.
+//  bisect:marking = the global edge order (0 index, 1 longest, 2 sorted, 3 explicit).
+inline constexpr const char *kStateArray = "bisect:state";
+inline constexpr int pack_state(int permutation_rank, Stage stage, int tag) {
+  return permutation_rank * 16 + int(stage) * 8 + tag;
+}
+// The lexicographic rank of the permutation p of 0..k-1 (k <= 5), and back
+// (false when rank is not below k!).
+int permutation_rank(const int *p, int k);
+bool permutation_of_rank(int rank, int k, int *p);
+
+// Older files (still read): the tuple's permutation, stage and tag apart.
 inline constexpr const char *kOrderArray = "bisect:order";     // dim+1 comps
 inline constexpr const char *kStageArray = "bisect:stage";     // 0 Opposite, 1 Maubach
 inline constexpr const char *kTagArray = "bisect:tag";         // see mesh.hpp

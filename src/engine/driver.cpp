@@ -87,7 +87,8 @@ DriverResult run_iterations(Mesh &mesh, const Selector &select, const DriverOpti
     report.iteration = it;
     report.first_new_vertex = mesh.num_vertices();
     const auto t_refine = std::chrono::steady_clock::now();
-    const RefineResult r = refine(mesh, selected, limits);
+    const RefineResult r = options.depth > 1 ? refine_marked(mesh, selected, options.depth, limits)
+                                             : refine(mesh, selected, limits);
     result.refine_seconds += seconds_since(t_refine);
     if (r.cancelled) {
       result.stop = StopReason::Cancelled;

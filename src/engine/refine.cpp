@@ -303,7 +303,8 @@ private:
   }
 
   // Children inherit cell data; point data is interpolated at midpoints,
-  // except label arrays (is_label_array), which new vertices get as kNoLabel.
+  // except labels: an integer array's value where both ends share it, else
+  // label_sentinel; is_label_array's arrays (colour, slice) always kNoLabel.
   void finish() {
     for (DataArray &a : m_.cell_data) {
       const std::size_t k = a.components;
@@ -312,15 +313,27 @@ private:
         for (std::size_t j = 0; j < k; ++j)
           a.values[(nc0_ + i) * k + j] = a.values[std::size_t(origin_[i]) * k + j];
     }
+    const VertexId *parents = m_.parent_edge.data() + 2 * nv0_;
+    const std::size_t made = m_.num_vertices() - nv0_;
     for (DataArray &a : m_.point_data) {
       const std::size_t k = a.components;
       if (is_label_array(a.name)) {
         a.values.resize(m_.num_vertices() * k, kNoLabel);
         continue;
       }
+      if (is_integer_type(a.type)) {
+        // Integer labels: the value both ends share, else the sentinel.
+        const double none = label_sentinel(a.type);
+        a.values.resize(m_.num_vertices() * k);
+        for (std::size_t i = 0; i < made; ++i)
+          for (std::size_t j = 0; j < k; ++j) {
+            const double p = a.values[parents[2 * i] * k + j], q = a.values[parents[2 * i + 1] * k + j];
+            a.values[(nv0_ + i) * k + j] = p == q ? p : none;
+          }
+        continue;
+      }
       a.values.resize(m_.num_vertices() * k);
-      const VertexId *parents = m_.parent_edge.data() + 2 * nv0_;
-      for (std::size_t i = 0; i < m_.num_vertices() - nv0_; ++i)
+      for (std::size_t i = 0; i < made; ++i)
         for (std::size_t j = 0; j < k; ++j)
           a.values[(nv0_ + i) * k + j] = 0.5 * (a.values[parents[2 * i] * k + j] +
                                                 a.values[parents[2 * i + 1] * k + j]);

@@ -26,31 +26,59 @@ void set_array(std::vector<DataArray> &arrays, DataArray a) {
 
 } // namespace
 
+// The lexicographic rank of a permutation p of 0..k-1 among the k!
+// permutations, and back.
+int permutation_rank(const int *p, int k) {
+  int rank = 0;
+  for (int i = 0; i < k; ++i) {
+    int smaller = 0;
+    for (int j = i + 1; j < k; ++j) smaller += p[j] < p[i];
+    int f = 1;
+    for (int m = 2; m < k - i; ++m) f *= m;
+    rank += smaller * f;
+  }
+  return rank;
+}
+
+bool permutation_of_rank(int rank, int k, int *p) {
+  int f = 1;
+  for (int m = 2; m <= k; ++m) f *= m;
+  if (rank < 0 || rank >= f) return false;
+  bool used[5] = {};
+  for (int i = 0; i < k; ++i) {
+    f /= (k - i);
+    const int pick = rank / f;
+    rank %= f;
+    for (int v = 0, seen = 0; v < k; ++v)
+      if (!used[v] && seen++ == pick) {
+        p[i] = v;
+        used[v] = true;
+        break;
+      }
+  }
+  return true;
+}
+
 void encode_state(Mesh &mesh) {
   const int n = mesh.dim, nv = n + 1;
   const std::size_t nc = mesh.num_cells();
-  DataArray order{kOrderArray, nv, std::vector<double>(nc * nv)};
-  DataArray stage{kStageArray, 1, std::vector<double>(nc)};
-  DataArray tag{kTagArray, 1, std::vector<double>(nc)};
-  DataArray marking{kMarkingArray, 1, std::vector<double>(nc, double(int(mesh.marking)))};
+  DataArray state{kStateArray, 1, std::vector<double>(mesh.marked() ? nc : 0)};
+  state.type = ValueType::Int32;
   double pts[5 * 4];
+  int swapped[5] = {1, 0, 2, 3, 4};
+  const int swapped_rank = permutation_rank(swapped, nv);
   for (std::size_t c = 0; c < nc; ++c) {
     cell_points(mesh, CellId(c), pts);
     VertexId *x = mesh.cell(CellId(c));
-    bool flip = signed_volume(pts, n) < 0;
-    for (int i = 0; i < nv; ++i) order.values[c * nv + i] = i;
-    if (flip) {
-      std::swap(x[0], x[1]);
-      order.values[c * nv + 0] = 1;
-      order.values[c * nv + 1] = 0;
-    }
-    stage.values[c] = mesh.stage.empty() ? 0 : double(int(mesh.stage[c]));
-    tag.values[c] = mesh.tag.empty() ? 0 : double(mesh.tag[c]);
+    const bool flip = signed_volume(pts, n) < 0;
+    if (flip) std::swap(x[0], x[1]);
+    if (mesh.marked())
+      state.values[c] = double(pack_state(flip ? swapped_rank : 0, mesh.stage[c], mesh.tag[c]));
   }
   if (mesh.marked()) {
-    set_array(mesh.cell_data, std::move(order));
-    set_array(mesh.cell_data, std::move(stage));
-    set_array(mesh.cell_data, std::move(tag));
+    set_array(mesh.cell_data, std::move(state));
+    DataArray marking{kMarkingArray, 1, std::vector<double>(nc, double(int(mesh.marking)))};
+    marking.type = ValueType::Int32;
     set_array(mesh.cell_data, std::move(marking));
     if (mesh.marking == Marking::Explicit) {
       const int ne = nv * n / 2;
@@ -70,37 +98,52 @@ void encode_state(Mesh &mesh) {
 }
 
 void strip_state(Mesh &mesh) {
-  const int order = find_array(mesh.cell_data, kOrderArray);
-  if (order >= 0) {
-    const DataArray &a = mesh.cell_data[std::size_t(order)];
-    const std::size_t k = std::size_t(a.components);
+  const int state = find_array(mesh.cell_data, kStateArray);
+  if (state >= 0) {
+    const DataArray &a = mesh.cell_data[std::size_t(state)];
     for (std::size_t c = 0; c < mesh.num_cells(); ++c)
-      if (a.values[c * k] == 1) std::swap(mesh.cell(CellId(c))[0], mesh.cell(CellId(c))[1]);
+      if (int(a.values[c]) >> 4 != 0) std::swap(mesh.cell(CellId(c))[0], mesh.cell(CellId(c))[1]);
   }
   std::erase_if(mesh.cell_data, [](const DataArray &a) {
-    return a.name == kOrderArray || a.name == kStageArray || a.name == kTagArray ||
-           a.name == kMarkingArray || a.name == kEdgeRankArray;
+    return a.name == kStateArray || a.name == kOrderArray || a.name == kStageArray ||
+           a.name == kTagArray || a.name == kMarkingArray || a.name == kEdgeRankArray;
   });
   strip_tree(mesh);
 }
 
 bool decode_state(Mesh &mesh, const std::string &path) {
   int io = find_array(mesh.cell_data, kOrderArray), is = find_array(mesh.cell_data, kStageArray),
-      it = find_array(mesh.cell_data, kTagArray), im = find_array(mesh.cell_data, kMarkingArray);
+      it = find_array(mesh.cell_data, kTagArray), im = find_array(mesh.cell_data, kMarkingArray),
+      ip = find_array(mesh.cell_data, kStateArray);
+  // Two forms: bisect:state + bisect:marking (written since 0.2), or the
+  // older bisect:order + bisect:stage + bisect:tag + bisect:marking.
+  if (ip >= 0) {
+    if (im < 0)
+      throw InputError(path, std::string("bisection state is incomplete: ") + kStateArray +
+                                 " without " + kMarkingArray);
+    for (int i : {io, is, it})
+      if (i >= 0)
+        throw InputError(path, std::string("bisection state given twice: ") + kStateArray +
+                                   " and " + mesh.cell_data[std::size_t(i)].name);
+  }
   int present = (io >= 0) + (is >= 0) + (it >= 0) + (im >= 0);
-  if (present == 0) {
+  if (present == 0 && ip < 0) {
     strip_tree(mesh); // a tree without the state it belongs to means nothing
     return false;
   }
-  if (present != 4)
+  if (ip < 0 && present != 4)
     throw InputError(path, std::string("bisection state is incomplete: expected cell arrays ") +
-                               kOrderArray + ", " + kStageArray + ", " + kTagArray + ", " +
-                               kMarkingArray);
+                               kStateArray + " and " + kMarkingArray + " (or " + kOrderArray +
+                               ", " + kStageArray + ", " + kTagArray + ", " + kMarkingArray + ")");
   const int n = mesh.dim, nv = n + 1;
   const std::size_t nc = mesh.num_cells();
-  const DataArray &order = mesh.cell_data[io], &stage = mesh.cell_data[is],
-                  &tag = mesh.cell_data[it], &marking = mesh.cell_data[im];
-  if (order.components != nv || stage.components != 1 || tag.components != 1 ||
+  const DataArray &marking = mesh.cell_data[std::size_t(im)];
+  const DataArray *order = io >= 0 ? &mesh.cell_data[std::size_t(io)] : nullptr;
+  const DataArray *stage = is >= 0 ? &mesh.cell_data[std::size_t(is)] : nullptr;
+  const DataArray *tag = it >= 0 ? &mesh.cell_data[std::size_t(it)] : nullptr;
+  const DataArray *packed = ip >= 0 ? &mesh.cell_data[std::size_t(ip)] : nullptr;
+  if ((order && order->components != nv) || (stage && stage->components != 1) ||
+      (tag && tag->components != 1) || (packed && packed->components != 1) ||
       marking.components != 1)
     throw InputError(path, "bisection state arrays have the wrong number of components");
   double m0 = nc ? marking.values[0] : 0;
@@ -140,7 +183,28 @@ bool decode_state(Mesh &mesh, const std::string &path) {
                                   what + ")");
     };
     if (marking.values[c] != m0) throw bad("mixed " + std::string(kMarkingArray));
-    double s = stage.values[c], t = tag.values[c];
+    double s, t;
+    int perm[5];
+    if (packed) {
+      const double v = packed->values[c];
+      if (!(v >= 0 && v < 4096 && v == std::floor(v))) throw bad(std::string(kStateArray) + " out of range");
+      const int w = int(v);
+      s = (w >> 3) & 1;
+      t = w & 7;
+      if (!permutation_of_rank(w >> 4, nv, perm))
+        throw bad(std::string(kStateArray) + ": no such vertex order");
+    } else {
+      s = stage->values[c];
+      t = tag->values[c];
+      unsigned seen = 0;
+      for (int i = 0; i < nv; ++i) {
+        const double p = order->values[c * std::size_t(nv) + std::size_t(i)];
+        if (!(p >= 0 && p < nv && p == std::floor(p)) || (seen >> int(p) & 1u))
+          throw bad(std::string(kOrderArray) + " is not a permutation");
+        seen |= 1u << int(p);
+        perm[i] = int(p);
+      }
+    }
     if (s == 1) {
       if (!(t >= 1 && t <= n && t == std::floor(t))) throw bad("Maubach tag out of range");
       mesh.stage[c] = Stage::Maubach;
@@ -153,20 +217,13 @@ bool decode_state(Mesh &mesh, const std::string &path) {
     mesh.tag[c] = std::uint8_t(t);
     VertexId conn[5], *x = mesh.cell(CellId(c));
     std::copy(x, x + nv, conn);
-    unsigned seen = 0;
-    for (int i = 0; i < nv; ++i) {
-      double p = order.values[c * nv + i];
-      if (!(p >= 0 && p < nv && p == std::floor(p)) || (seen >> int(p) & 1u))
-        throw bad(std::string(kOrderArray) + " is not a permutation");
-      seen |= 1u << int(p);
-      x[i] = conn[int(p)];
-    }
+    for (int i = 0; i < nv; ++i) x[i] = conn[perm[i]];
   }
   if (std::string why = check_state_consistency(mesh); !why.empty())
     throw InputError(path, "the bisection state is inconsistent (" + why +
                                "): the file was not written by bisect as it is, or was altered "
                                "(cell order, connectivity or bisect:* arrays)");
-  for (int i : {io, is, it, im, ir})
+  for (int i : {io, is, it, im, ir, ip})
     if (i >= 0) mesh.cell_data[i].name.clear();
   std::erase_if(mesh.cell_data, [](const DataArray &a) { return a.name.empty(); });
   decode_tree(mesh, path);

@@ -61,6 +61,8 @@ void encode_tree(Mesh &mesh) {
     a.values[v] = p == kNoVertex ? -1.0 : double(p);
     b.values[v] = q == kNoVertex ? -1.0 : double(q);
   }
+  generation.type = ValueType::UInt16;
+  a.type = b.type = ValueType::Int32;
   put(mesh.cell_data, std::move(generation));
   put(mesh.point_data, std::move(a));
   put(mesh.point_data, std::move(b));

@@ -158,6 +158,17 @@ KeptCells select_cells(const std::string &path, const vtu::Grid &g) {
   return kept;
 }
 
+ValueType value_type_named(const std::string &t) {
+  static const std::pair<const char *, ValueType> names[] = {
+      {"Float32", ValueType::Float32}, {"Float64", ValueType::Float64}, {"Int8", ValueType::Int8},
+      {"UInt8", ValueType::UInt8},     {"Int16", ValueType::Int16},     {"UInt16", ValueType::UInt16},
+      {"Int32", ValueType::Int32},     {"UInt32", ValueType::UInt32},   {"Int64", ValueType::Int64},
+      {"UInt64", ValueType::UInt64}};
+  for (const auto &[n, v] : names)
+    if (t == n) return v;
+  return ValueType::Unknown;
+}
+
 // The selected tuples (file ids in `rows`) of `a`; all of them, in order,
 // are moved rather than copied.
 template <class Row>
@@ -166,6 +177,7 @@ DataArray take_rows(vtu::Array &a, const std::string &name, const std::vector<Ro
   DataArray out;
   out.name = name;
   out.components = a.components;
+  out.type = value_type_named(a.type);
   if (all_rows) {
     out.values = std::move(a.values);
     return out;

@@ -42,7 +42,6 @@
 #include <type_traits>
 
 #include <fcntl.h>
-#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -1181,7 +1180,7 @@ private:
   std::vector<Array> read_field_data(const Element &e) const {
     std::vector<Array> out;
     for (const ArraySpec &a : specs(e, "field data", "")) {
-      Array arr{a.name, a.components, a.numeric, {}};
+      Array arr{a.name, a.components, a.numeric, {}, std::string(info(a.type).name)};
       if (a.numeric) {
         std::uint64_t want = kAnyCount;
         if (a.tuples && *a.tuples <= kAnyCount / std::uint64_t(a.components))
@@ -1203,7 +1202,7 @@ private:
     if (!section)
       return out;
     for (const ArraySpec &a : specs(*section, what, piece)) {
-      Array arr{a.name, a.components, a.numeric, {}};
+      Array arr{a.name, a.components, a.numeric, {}, std::string(info(a.type).name)};
       if (a.numeric)
         arr.values = arrays_.read<double>(a, times(tuples, a.components));
       out.push_back(std::move(arr));
@@ -1370,51 +1369,53 @@ Grid parse_grid(const std::string &path, const char *data, std::size_t size) {
 
 namespace {
 
-// The file mapped into memory (read-only; parsing never copies it).
-class MappedFile {
+// The file read into memory with read(2), not mapped: a file truncated by
+// another process while it is read would make a mapping raise SIGBUS; here
+// it is an InputError ("the file changed while it was read").
+class FileBytes {
 public:
-  explicit MappedFile(const std::string &path) {
-    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0)
+  explicit FileBytes(const std::string &path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
       throw InputError(path, std::string("cannot open: ") + std::strerror(errno));
     struct stat st;
-    if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
-      ::close(fd_);
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+      ::close(fd);
       throw InputError(path, "not a regular file");
     }
-    size_ = std::size_t(st.st_size);
-    if (size_ == 0)
-      return;
-    // MAP_POPULATE: the pages are mapped in one go rather than one fault
-    // at a time.
-    void *p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd_, 0);
-    if (p == MAP_FAILED) {
-      const int err = errno;
-      ::close(fd_);
-      throw InputError(path, std::string("cannot read: ") + std::strerror(err));
+    const std::size_t size = std::size_t(st.st_size);
+    try {
+      bytes_.resize(size);
+    } catch (...) {
+      ::close(fd);
+      throw;
     }
-    data_ = static_cast<const char *>(p);
+    std::size_t done = 0;
+    while (done < size) {
+      const ssize_t n = ::read(fd, bytes_.data() + done, std::min<std::size_t>(size - done, 1u << 30));
+      if (n < 0 && errno == EINTR)
+        continue;
+      if (n <= 0) {
+        const int err = n < 0 ? errno : 0;
+        ::close(fd);
+        throw InputError(path, err ? std::string("cannot read: ") + std::strerror(err)
+                                   : "the file changed while it was read (it is shorter now)");
+      }
+      done += std::size_t(n);
+    }
+    ::close(fd);
   }
-  ~MappedFile() {
-    if (data_)
-      ::munmap(const_cast<char *>(data_), size_);
-    ::close(fd_);
-  }
-  MappedFile(const MappedFile &) = delete;
-  MappedFile &operator=(const MappedFile &) = delete;
-  const char *data() const { return data_ ? data_ : ""; }
-  std::size_t size() const { return size_; }
+  const char *data() const { return bytes_.data(); }
+  std::size_t size() const { return bytes_.size(); }
 
 private:
-  int fd_ = -1;
-  const char *data_ = nullptr;
-  std::size_t size_ = 0;
+  std::vector<char> bytes_;
 };
 
 } // namespace
 
 Grid read_grid(const std::string &path) {
-  const MappedFile file(path);
+  const FileBytes file(path);
   return parse_grid(path, file.data(), file.size());
 }
 

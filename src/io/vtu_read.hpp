@@ -22,6 +22,7 @@ struct Array {
   int components = 1;
   bool numeric = true;
   std::vector<double> values; // tuples * components, component fastest
+  std::string type;           // as in the file: "Int32", "Float64", ...
 };
 
 struct Grid {

@@ -138,6 +138,12 @@ template <> const char *type_name<double>() { return "Float64"; }
 template <> const char *type_name<std::int32_t>() { return "Int32"; }
 template <> const char *type_name<std::int64_t>() { return "Int64"; }
 template <> const char *type_name<std::uint8_t>() { return "UInt8"; }
+template <> const char *type_name<std::int8_t>() { return "Int8"; }
+template <> const char *type_name<std::int16_t>() { return "Int16"; }
+template <> const char *type_name<std::uint16_t>() { return "UInt16"; }
+template <> const char *type_name<std::uint32_t>() { return "UInt32"; }
+template <> const char *type_name<std::uint64_t>() { return "UInt64"; }
+template <> const char *type_name<float>() { return "Float32"; }
 
 // Writes one DataArray element: `count` values of T, value(i) for the i-th.
 template <class T, class Value>
@@ -208,6 +214,31 @@ bool fits_int32(const std::vector<double> &values) {
   return true;
 }
 
+// Writes `a` in its type (ValueType); Unknown: Int32 when every value is a
+// 32-bit integer and `guess_int` (cell arrays), else Float64.
+void write_typed(Writer &w, VtuCompression compression, int level, const DataArray &a,
+                 bool guess_int) {
+  auto put = [&]<class T>(T) {
+    write_array<T>(w, compression, level, a.name, a.components, a.values.size(),
+                   [&](std::size_t i) { return static_cast<T>(a.values[i]); });
+  };
+  switch (a.type) {
+  case ValueType::Float32: return put(float{});
+  case ValueType::Float64: return put(double{});
+  case ValueType::Int8: return put(std::int8_t{});
+  case ValueType::UInt8: return put(std::uint8_t{});
+  case ValueType::Int16: return put(std::int16_t{});
+  case ValueType::UInt16: return put(std::uint16_t{});
+  case ValueType::Int32: return put(std::int32_t{});
+  case ValueType::UInt32: return put(std::uint32_t{});
+  case ValueType::Int64: return put(std::int64_t{});
+  case ValueType::UInt64: return put(std::uint64_t{});
+  case ValueType::Unknown: break;
+  }
+  if (guess_int && fits_int32(a.values)) return put(std::int32_t{});
+  put(double{});
+}
+
 } // namespace
 
 void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression compression,
@@ -235,21 +266,13 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
       plane_z = &a;
       continue;
     }
-    write_array<double>(w, compression, level, a.name, a.components, a.values.size(),
-                        [&](std::size_t i) { return a.values[i]; });
+    write_typed(w, compression, level, a, false);
   }
   if (dim == 4)
     write_array<double>(w, compression, level, "t", 1, nv,
                         [&](std::size_t v) { return mesh.coords[v * 4 + 3]; });
   w.text("      </PointData>\n      <CellData>\n");
-  for (const DataArray &a : mesh.cell_data) {
-    if (fits_int32(a.values))
-      write_array<std::int32_t>(w, compression, level, a.name, a.components, a.values.size(),
-                                [&](std::size_t i) { return std::int32_t(a.values[i]); });
-    else
-      write_array<double>(w, compression, level, a.name, a.components, a.values.size(),
-                          [&](std::size_t i) { return a.values[i]; });
-  }
+  for (const DataArray &a : mesh.cell_data) write_typed(w, compression, level, a, true);
   w.text("      </CellData>\n      <Points>\n");
   write_array<double>(w, compression, level, "Points", 3, 3 * nv, [&](std::size_t i) {
     const std::size_t v = i / 3, k = i % 3;

@@ -48,7 +48,7 @@ for name in ["ours-zlib.vtu", "ours-none.vtu", "ours.msh"]:
     tets = [b for b in m.cells if b.type == "tetra"]
     n = sum(len(b.data) for b in tets)
     assert n == cells, (name, n, cells)
-    for key in ("bisect:order", "bisect:tag", "region"):
+    for key in ("bisect:state", "bisect:marking", "region"):
         assert key in m.cell_data, (name, key, list(m.cell_data))
         assert sum(len(a) for a in m.cell_data[key]) == n, (name, key)
     print(name, n, "tets,", len(m.cell_data), "cell arrays")

@@ -7,6 +7,7 @@ mkdir -p "$WORK/bin" "$WORK/run"
 ln -s "$BISECT" "$WORK/bin/bisect"
 ln -s "$ROOT/data" "$WORK/run/data"
 ln -s "$ROOT/scripts" "$WORK/run/scripts"
+ln -s "$(dirname "$BISECT")" "$WORK/run/build" # the build tree (cmake --install build ...)
 cd "$WORK/run"
 export PATH="$WORK/bin:$PATH"
 commands=$(awk '/^```/ { if (inside) { inside = 0; next } if ($0 == "```sh") { inside = 1; next } }

@@ -39,7 +39,7 @@ for i in range(g.GetNumberOfCells()):
 cd = g.GetCellData()
 names = {cd.GetArrayName(i): cd.GetArray(i) for i in range(cd.GetNumberOfArrays())}
 if ".t" not in path:  # a refined mesh carries its bisection state as integers
-    for n in ("bisect:order", "bisect:stage", "bisect:tag", "bisect:marking"):
+    for n in ("bisect:state", "bisect:marking"):  # one component each
         assert n in names, (n, list(names))
         assert names[n].GetDataTypeAsString() == "int", (n, names[n].GetDataTypeAsString())
         assert names[n].GetNumberOfTuples() == cells
