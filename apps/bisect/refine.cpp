@@ -31,7 +31,7 @@ struct RefineArgs {
   std::string marking;
   std::int64_t max_elements = 0;
   double max_memory_gib = 0;
-  bool force = false, check = false;
+  bool force = false, check = false, origin = false;
   CommonFlags flags;
   std::vector<double> slices; // t values (last coordinate): sections of the final mesh
 };
@@ -101,6 +101,14 @@ int run_refine(const RefineArgs &a) {
   check_output_format(out, mesh.dim, a.format);
   if (!a.slices.empty() && mesh.dim < 3)
     throw UsageError("--slices needs a 3D (2D+t) or 4D mesh; " + a.input + " is 2D");
+  if (a.origin) {
+    // bisect:origin: the input cell each output cell descends from (children
+    // inherit cell arrays); a previous run's is replaced.
+    std::erase_if(mesh.cell_data, [](const DataArray &d) { return d.name == kOriginArray; });
+    DataArray origin{kOriginArray, 1, std::vector<double>(mesh.num_cells()), ValueType::Int32};
+    for (std::size_t c = 0; c < mesh.num_cells(); ++c) origin.values[c] = double(c);
+    mesh.cell_data.push_back(std::move(origin));
+  }
   std::unique_ptr<Region> region;
   if (!a.region.empty()) region = read_region(a.region, mesh.dim);
   // The cells the indicator marks, in the input's numbering (one iteration).
@@ -306,6 +314,9 @@ Command add_refine(CLI::App &app) {
       ->delimiter(',');
   add_common_flags(cmd, a->flags);
   cmd->add_flag("--force,-f", a->force, "Overwrite existing output files (never the input)");
+  cmd->add_flag("--origin", a->origin,
+                "Write the cell array bisect:origin: for each output cell the index of the input "
+                "cell it descends from (the parent map for a solver's own transfer)");
   cmd->add_flag("--check", a->check,
                        "After every iteration, check conformity and that volume, boundary measure "
                        "and Euler characteristic are those of the input (exit 2 naming the "

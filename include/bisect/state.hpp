@@ -16,6 +16,9 @@ namespace bisect {
 //    (1, 0, 2, ...)); stage 0 Stage 1 (Opposite), 1 Maubach; tag as in mesh.hpp.
 //  bisect:marking = the global edge order (0 index, 1 longest, 2 sorted, 3 explicit).
 inline constexpr const char *kStateArray = "bisect:state";
+// refine --origin: per output cell, the index of the input cell it descends
+// from (an ordinary Int32 cell array, inherited by children).
+inline constexpr const char *kOriginArray = "bisect:origin";
 inline constexpr int pack_state(int permutation_rank, Stage stage, int tag) {
   return permutation_rank * 16 + int(stage) * 8 + tag;
 }

@@ -5,6 +5,7 @@
 
 #include "bisect/check.hpp"
 #include "core/dimension.hpp"
+#include "core/geometry.hpp"
 #include "bisect/measure.hpp"
 #include "core/numbering.hpp"
 
@@ -19,14 +20,8 @@ namespace {
 
 double squared_length(const EdgeOrder &o, VertexId a, VertexId b) {
   if (a > b) std::swap(a, b);
-  const double *p = o.coords->data() + std::size_t(a) * o.dim;
-  const double *q = o.coords->data() + std::size_t(b) * o.dim;
-  double s = 0;
-  for (int k = 0; k < o.dim; ++k) {
-    double d = q[k] - p[k];
-    s += d * d;
-  }
-  return s;
+  return geometry::squared_distance(o.coords->data() + std::size_t(a) * o.dim,
+                                    o.coords->data() + std::size_t(b) * o.dim, o.dim);
 }
 
 } // namespace

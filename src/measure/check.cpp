@@ -11,6 +11,7 @@
 // against the vertices in its bounding box.
 #include "bisect/check.hpp"
 #include "core/dimension.hpp"
+#include "core/geometry.hpp"
 
 #include "bisect/measure.hpp"
 
@@ -37,8 +38,8 @@ constexpr int binomial(int n, int k) {
   return r;
 }
 
-// All K-subsets of {0..N-1} in lexicographic order. For K = N-1 (facets of a
-// cell with N vertices) subset m omits local vertex N-1-m.
+// All K-subsets of {0..N-1} in lexicographic order (for K = N-1, subset m
+// omits local vertex N-1-m; subsimplices() renumbers facets).
 template <int N, int K> constexpr std::array<std::array<int, K>, binomial(N, K)> combinations() {
   std::array<std::array<int, K>, binomial(N, K)> out{};
   std::array<int, K> c{};
@@ -58,9 +59,18 @@ template <int N, int K> constexpr std::array<std::array<int, K>, binomial(N, K)>
   return out;
 }
 
-template <int Dim> constexpr int opposite_of_facet(int m) {
-  return Dim - m;
+// The K-vertex sub-simplices of a cell, numbered so that for facets (K = N-1)
+// subset m omits local vertex m, as numbering.hpp numbers facets; other sizes
+// in lexicographic order.
+template <int N, int K> constexpr std::array<std::array<int, K>, binomial(N, K)> subsimplices() {
+  auto out = combinations<N, K>();
+  if constexpr (K == N - 1) // lexicographic subset m omits N-1-m: reverse
+    for (int m = 0; m < K / 2 + 1 && m < N - 1 - m; ++m)
+      std::swap(out[m], out[N - 1 - m]);
+  return out;
 }
+
+template <int Dim> constexpr int opposite_of_facet(int m) { return m; }
 
 template <int K> void sort_small(std::array<VertexId, K> &a) {
   for (int i = 1; i < K; ++i)
@@ -102,7 +112,7 @@ template <int Dim, int K, bool WithRefs = true, bool SideOnly = false, class Vis
 void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
                          const std::vector<std::int8_t> *signs = nullptr) {
   static_assert(K >= 2 && K <= 4);
-  static constexpr auto subsets = combinations<Dim + 1, K>();
+  static constexpr auto subsets = subsimplices<Dim + 1, K>();
   constexpr int M = int(subsets.size());
   static_assert(!SideOnly || (WithRefs && K == Dim));
   constexpr int kRefBits = SideOnly ? 1 : WithRefs ? 32 : 0;
@@ -194,12 +204,7 @@ template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
 
 // ---- small geometry ---------------------------------------------------------
 
-template <int Dim> double squared_distance(const double *p, const double *q) {
-  double s = 0;
-  for (int i = 0; i < Dim; ++i)
-    s += (p[i] - q[i]) * (p[i] - q[i]);
-  return s;
-}
+using geometry::squared_distance;
 
 
 // Solves the n x n system G x = b (n <= 4) by elimination with pivoting;
@@ -1113,7 +1118,7 @@ template <int Dim> std::string find_fold(const Mesh &mesh) {
     }
     return {};
   } else {
-    static constexpr auto subsets = combinations<N, Dim - 1>();
+    static constexpr auto subsets = subsimplices<N, Dim - 1>();
     constexpr int M = int(subsets.size());
     std::string found;
     for_each_subsimplex<Dim, Dim - 1>(

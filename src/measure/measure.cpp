@@ -5,6 +5,7 @@
 // public functions dispatch once on `dim` (STYLE.md §3).
 #include "bisect/measure.hpp"
 #include "core/dimension.hpp"
+#include "core/geometry.hpp"
 
 #include <algorithm>
 #include <array>
@@ -64,12 +65,7 @@ template <int Dim> double edge_determinant(const double *verts) {
   return determinant<Dim>(a);
 }
 
-template <int Dim> double squared_distance(const double *p, const double *q) {
-  double s = 0;
-  for (int i = 0; i < Dim; ++i)
-    s += (p[i] - q[i]) * (p[i] - q[i]);
-  return s;
-}
+using geometry::squared_distance;
 
 template <int Dim> double signed_volume_t(const double *verts) {
   return edge_determinant<Dim>(verts) / factorial(Dim);

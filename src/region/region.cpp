@@ -36,6 +36,7 @@
 // fixed-size stack arrays only.
 #include "bisect/region.hpp"
 
+#include "core/geometry.hpp"
 #include "region/levelset.hpp"
 #include "bisect/mesh.hpp"
 
@@ -73,19 +74,8 @@ constexpr double kRadiusSlack = 1e-10;
 // ---------------------------------------------------------------------------
 // Geometry kernels on points of M coordinates.
 
-template <int M> double dist2(const double *a, const double *b) {
-  double s = 0;
-  for (int k = 0; k < M; ++k)
-    s += (a[k] - b[k]) * (a[k] - b[k]);
-  return s;
-}
-
-template <int M> double dot(const double *a, const double *b) {
-  double s = 0;
-  for (int k = 0; k < M; ++k)
-    s += a[k] * b[k];
-  return s;
-}
+using geometry::dot;
+using geometry::squared_distance;
 
 // Squared distance from p to the box [lo, hi] (a lower bound for the distance
 // to anything inside the box).
@@ -170,7 +160,7 @@ template <int M> double face_dist2(const double *p, const double *pts, const int
 template <int M> bool hull_within(const double *p, const double *pts, int n, double r2) {
   assert(n <= kMaxHullPoints);
   for (int i = 0; i < n; ++i)
-    if (dist2<M>(p, pts + i * M) <= r2)
+    if (squared_distance<M>(p, pts + i * M) <= r2)
       return true;
   int idx[kMaxHullPoints];
   for (unsigned mask = 3; mask < (1u << n); ++mask) {
@@ -238,7 +228,7 @@ template <int M>
 bool hull_meets_sphere(const double *c, double r2lo, double r2hi, const double *pts, int n) {
   double dmin = kInf, dmax = 0;
   for (int i = 0; i < n; ++i) {
-    const double d = dist2<M>(c, pts + i * M);
+    const double d = squared_distance<M>(c, pts + i * M);
     dmin = std::min(dmin, d);
     dmax = std::max(dmax, d);
   }

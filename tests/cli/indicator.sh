@@ -109,4 +109,29 @@ expect_exit 0 "$BISECT" refine in3.vtu --indicator eta --above 0.99 \
   --region "$ROOT/data/regions/everything3d.json" -o c.vtu -f -q --json
 both=$(/usr/bin/python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["selected"])' "$WORK/out")
 [[ $both == "$everything" && $only_ind -lt $everything ]] || fail "union: $only_ind, $everything, $both"
+# --origin: each output cell lies in the input cell it names, and the cells
+# naming an input cell fill it (their volumes sum to its volume).
+for dim in 2 3 4; do
+  expect_exit 0 "$BISECT" refine "in$dim.vtu" --indicator eta --top 0.1 --depth 2 --origin \
+    -o "o$dim.vtu" -f -q
+  /usr/bin/python3 - "$dim" <<'PY'
+import sys, math, pybisect, numpy as np
+dim = int(sys.argv[1])
+def geo(m):
+    x = np.asarray(m.points)[np.asarray(m.cells)]
+    return x, np.abs(np.linalg.det(x[:, 1:] - x[:, :1])) / math.factorial(dim)
+a, b = pybisect.read(f"in{dim}.vtu"), pybisect.read(f"o{dim}.vtu")
+xa, va = geo(a)
+xb, vb = geo(b)
+origin = np.asarray(b.cell_data["bisect:origin"]).astype(int)
+assert origin.min() >= 0 and origin.max() < a.num_cells
+sums = np.bincount(origin, weights=vb, minlength=a.num_cells)
+assert np.allclose(sums, va, rtol=1e-12, atol=0), "volumes by origin differ"
+cent = xb.mean(axis=1)
+p0 = xa[origin, 0]
+T = np.transpose(xa[origin, 1:] - p0[:, None, :], (0, 2, 1))
+lam = np.linalg.solve(T, (cent - p0)[..., None])[..., 0]
+assert (lam > -1e-12).all() and (lam.sum(axis=1) < 1 + 1e-12).all(), "a cell outside its origin"
+PY
+done
 echo "indicator: rules, depth, point arrays, union and errors in 2D, 3D, 4D"
