@@ -5,7 +5,9 @@ A mesh here is (points (N, 2), cells (M, 3), cell_data {name: (M, ...) array}).
 cell_data carries bisect's bisection state (the cell arrays "bisect:*"), which
 must go back into the next call unchanged so the bisection sequence continues;
 refine() and coarsen() keep every array they are given and only add/replace the
-indicator. An in-process variant (a Python module pybisect with
+indicator. The bisection tree coarsen needs also has point arrays
+("bisect:parent_a", "bisect:parent_b"): the class keeps those of the last
+result and writes them back with the same points. An in-process variant (a Python module pybisect with
 mesh.refine(marked=...)) can replace this class with the same two methods.
 """
 import json
@@ -41,10 +43,11 @@ def dorfler_marking(eta, theta):
     return marked
 
 
-def write_vtu(path, points, cells, cell_data):
+def write_vtu(path, points, cells, cell_data, point_data=None):
     xyz = np.column_stack([points, np.zeros(len(points))])
     meshio.write(path, meshio.Mesh(xyz, [("triangle", cells)],
-                                   cell_data={k: [v] for k, v in cell_data.items()}))
+                                   cell_data={k: [v] for k, v in cell_data.items()},
+                                   point_data=point_data or {}))
 
 
 def read_vtu(path):
@@ -97,6 +100,11 @@ class BisectCLI:
         stem = os.path.join(self.workdir, f"{what}-{self._step:03d}")
         return stem + "-in.vtu", stem + "-out.vtu"
 
+    def _tree_for(self, points):
+        """The tree's point arrays of the last result, if these are its points."""
+        tree = getattr(self, "_tree", {})
+        return tree if all(len(v) == len(points) for v in tree.values()) else {}
+
     def _run(self, args, src, dst):
         run = subprocess.run([self.binary] + args, capture_output=True, text=True)
         if run.returncode != 0:
@@ -104,6 +112,8 @@ class BisectCLI:
                                f"{run.returncode}): {run.stderr.strip()}")
         self.calls += 1
         result = read_vtu(dst)
+        mesh = meshio.read(dst)
+        self._tree = {k: v for k, v in mesh.point_data.items() if k.startswith("bisect:")}
         if not self.keep_files:
             for path in [src, dst, self._region_path()]:
                 if os.path.exists(path):
@@ -132,7 +142,7 @@ class BisectCLI:
         data = dict(cell_data)
         if eta is not None:
             data[name] = np.asarray(eta, dtype=np.float64)
-        write_vtu(src, points, cells, data)
+        write_vtu(src, points, cells, data, self._tree_for(points))
         args = ["refine", src, "-o", dst, "-q", "--quality-csv", "none", "-f"]
         if eta is None:
             lo, hi = points.min(axis=0), points.max(axis=0)
@@ -162,7 +172,7 @@ class BisectCLI:
         src, dst = self._paths("coarsen")
         data = dict(cell_data)
         data[name] = np.asarray(indicator, dtype=np.float64)
-        write_vtu(src, points, cells, data)
+        write_vtu(src, points, cells, data, self._tree_for(points))
         args = ["coarsen", src, "--indicator", name, "--below", repr(float(below)),
                 "-o", dst]
         # Options refine has; passed only if coarsen documents them too.
