@@ -112,6 +112,7 @@ std::string write_slice(const Mesh &mesh, int axis, double value, OutputSet &out
   Mesh s = slice_mesh(mesh, axis, value);
   // The 4D bisection state means nothing on a 3D section.
   std::erase_if(s.cell_data, [](const DataArray &d) { return d.name.rfind("bisect:", 0) == 0; });
+  strip_tree(s); // the tree arrays encode_state added to the mesh are not the section's
   if (s.num_cells() == 0)
     throw InputError(outputs.name(h), std::string("the section ") +
                                           (axis == mesh.dim - 1 ? 't' : "xyz"[axis]) + " = " +

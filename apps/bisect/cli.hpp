@@ -29,6 +29,7 @@ struct Command {
 };
 
 Command add_refine(CLI::App &app);
+Command add_coarsen(CLI::App &app);
 Command add_info(CLI::App &app);
 Command add_check(CLI::App &app);
 Command add_quality(CLI::App &app);

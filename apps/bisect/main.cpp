@@ -72,7 +72,7 @@ int main(int argc, char **argv) {
 
   std::vector<Command> commands{add_refine(app), add_info(app),  add_check(app),
                                 add_quality(app), add_colour(app), add_extrude(app),
-                                add_slice(app)};
+                                add_slice(app), add_coarsen(app)};
   for (Command &c : add_generate(app)) commands.push_back(std::move(c));
 
   try {

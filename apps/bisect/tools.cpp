@@ -216,7 +216,7 @@ int run_simplex(const GenerateArgs &a) {
   if (!a.type.empty()) {
     try {
       force_type(simplex, a.type);
-    } catch (const std::invalid_argument &e) {
+    } catch (const UsageError &e) {
       throw UsageError(std::string("generate simplex --type: ") + e.what());
     }
   }

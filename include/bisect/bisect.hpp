@@ -12,6 +12,7 @@
 #pragma once
 
 #include "bisect/check.hpp"    // conformity checks, input validation
+#include "bisect/coarsen.hpp"  // coarsening along the bisection tree
 #include "bisect/colour.hpp"   // vertex colourings (tools)
 #include "bisect/driver.hpp"   // the iteration driver, refine by marked cells
 #include "bisect/error.hpp"    // bisect::Error and its kinds

@@ -72,7 +72,7 @@ std::string simplex_type(const EdgeOrder &order, const VertexId *ids, int dim);
 // Forces the marks of a mesh's cells to a chosen type: finds a ranking of the
 // edges of cell 0 (the only cell of a generated simplex) whose marks have
 // `type`, stores it as the explicit edge order and marks the mesh. Throws
-// std::invalid_argument naming the types that exist when `type` cannot arise
+// UsageError naming the types that exist when `type` cannot arise
 // from any global edge order (or the mesh is not a single 3D/4D simplex).
 void force_type(Mesh &mesh, const std::string &type);
 

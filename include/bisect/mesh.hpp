@@ -92,11 +92,35 @@ struct Mesh {
   std::unordered_map<std::uint64_t, std::uint32_t> edge_rank; // Marking::Explicit only
   std::vector<DataArray> point_data;
   std::vector<DataArray> cell_data;
+  // The bisection tree, what coarsening needs (ALGORITHMS.md §10). Either
+  // both empty (no tree: every cell has generation 0 and every vertex is
+  // original) or sized for the mesh: refine() fills them in (O(1) per
+  // bisection), coarsen() reads them, the writers carry them as the arrays
+  // bisect:generation, bisect:parent_a, bisect:parent_b (state.hpp).
+  //  - generation, per cell: bisections since the sequence started (cells of
+  //    the mesh where it started, or read without the array, have 0). 2 bytes.
+  //  - parent_edge, 2 per vertex: the ends of the edge the vertex was made
+  //    the midpoint of, both smaller ids than the vertex; kNoVertex twice for
+  //    an original vertex. 8 bytes per vertex (about 1.5 per cell in 3D).
+  // Code that adds, removes or renumbers cells or vertices of a mesh without
+  // keeping these up to date must clear them (clear_tree); refine() treats
+  // arrays not sized for the mesh as no tree.
+  std::vector<std::uint16_t> generation;
+  std::vector<VertexId> parent_edge;
 
   std::size_t num_vertices() const { return dim ? coords.size() / dim : 0; }
   std::size_t num_cells() const { return dim ? cells.size() / (dim + 1) : 0; }
   int cell_size() const { return dim + 1; }
   bool marked() const { return !stage.empty(); }
+  // True when the tree arrays are sized for the mesh (see above).
+  bool has_tree() const {
+    return generation.size() == num_cells() && parent_edge.size() == 2 * num_vertices() &&
+           num_cells() > 0;
+  }
+  void clear_tree() {
+    generation.clear();
+    parent_edge.clear();
+  }
   const double *point(VertexId v) const { return coords.data() + std::size_t(v) * dim; }
   const VertexId *cell(CellId c) const { return cells.data() + std::size_t(c) * (dim + 1); }
   VertexId *cell(CellId c) { return cells.data() + std::size_t(c) * (dim + 1); }

@@ -24,7 +24,7 @@ inline constexpr double kAbsoluteResolution = 0x1p-100; // about 7.9e-31
 
 struct RefineLimits {
   std::size_t max_cells = std::numeric_limits<std::size_t>::max();
-  // Largest vertex count ids may reach (kNoVertex is reserved); lowered in tests.
+  // Largest vertex count: ids are 32-bit (kNoVertex is reserved); a caller may lower it.
   std::size_t max_vertices = std::numeric_limits<VertexId>::max() - 1;
   // Checked between passes; when set, the iteration is undone (Ctrl-C).
   const std::atomic<bool> *cancel = nullptr;

@@ -37,6 +37,31 @@ inline constexpr const char *kMarkingArray = "bisect:marking"; // 0 index, 1 lon
 // (n-1,n); -1 for an edge without rank.
 inline constexpr const char *kEdgeRankArray = "bisect:edge_rank";
 
+// The bisection tree (mesh.hpp, ALGORITHMS.md §10), one-component integer
+// arrays so that converters that only take scalar fields (meshio's XDMF and
+// Gmsh 2.2 writers) keep them:
+//   bisect:generation (cell) generation of the cell, 0..65535
+//   bisect:parent_a, bisect:parent_b (point) the ends of the edge the vertex
+//     is the midpoint of, as ids of the file's points, both smaller than the
+//     vertex's own id; -1 for an original vertex.
+inline constexpr const char *kGenerationArray = "bisect:generation";
+inline constexpr const char *kParentAArray = "bisect:parent_a";
+inline constexpr const char *kParentBArray = "bisect:parent_b";
+
+// Adds the tree arrays when the mesh has a tree; otherwise removes any
+// (e.g. copied from another mesh's point data by a tool).
+void encode_tree(Mesh &mesh);
+// Moves the tree arrays, when present, into mesh.generation and
+// mesh.parent_edge and removes them from the data; without them the mesh has
+// no tree (every cell generation 0, every vertex original). Throws InputError
+// naming `path` and the array: wrong component count, a value that is not an
+// integer in range, parent ids not both -1 or both smaller than the vertex
+// and distinct, or a vertex that is not the midpoint of its parent edge
+// (relative 1e-6 of the edge's extent). Returns whether the arrays were there.
+bool decode_tree(Mesh &mesh, const std::string &path);
+// Removes the tree arrays from the data (the mesh's tree fields stay).
+void strip_tree(Mesh &mesh);
+
 // Before writing: orients every cell positively in `cells` and stores the
 // tuple as the `bisect:*` cell arrays (tuple[i] = cell[order[i]]).
 void encode_state(Mesh &mesh);

@@ -179,7 +179,7 @@ std::string simplex_type(const EdgeOrder &order, const VertexId *ids, int dim) {
 void force_type(Mesh &mesh, const std::string &type) {
   const int n = mesh.dim, nv = n + 1;
   if (mesh.num_cells() != 1 || (n != 3 && n != 4))
-    throw std::invalid_argument("forced types exist for one tetrahedron or one pentatope only");
+    throw UsageError("forced types exist for one tetrahedron or one pentatope only");
   const VertexId *x = mesh.cell(0);
   std::vector<std::uint64_t> edges;
   for (int i = 0; i < nv; ++i)
@@ -215,7 +215,7 @@ void force_type(Mesh &mesh, const std::string &type) {
   std::sort(seen.begin(), seen.end());
   std::string list;
   for (const std::string &t : seen) list += (list.empty() ? "" : ", ") + t;
-  throw std::invalid_argument("type " + type + " does not arise from any edge order of a " +
+  throw UsageError("type " + type + " does not arise from any edge order of a " +
                               (n == 3 ? std::string("tetrahedron") : std::string("pentatope")) +
                               "; the types that do: " + list);
 }

@@ -89,6 +89,11 @@ public:
   Refiner(Mesh &mesh, const RefineLimits &limits)
       : m_(mesh), order_(edge_order(mesh)), limits_(limits), nc0_(mesh.num_cells()),
         nv0_(mesh.num_vertices()), endpoint_(mesh.num_vertices(), 0) {
+    // The tree (mesh.hpp): a mesh without one starts a sequence here.
+    if (!m_.has_tree()) {
+      m_.generation.assign(nc0_, 0);
+      m_.parent_edge.assign(2 * nv0_, kNoVertex);
+    }
     // The undo log costs memory: keep it only when a limit could trip.
     logging_ = limits.max_cells != std::numeric_limits<std::size_t>::max() ||
                nv0_ + 16 * nc0_ >= limits.max_vertices || limits.cancel;
@@ -132,8 +137,8 @@ public:
         if (m_.num_vertices() > verts_before) {
           flag.assign(m_.num_vertices(), 0);
           for (std::size_t v = verts_before; v < m_.num_vertices(); ++v) {
-            flag[parents_[2 * (v - nv0_)]] = 1;
-            flag[parents_[2 * (v - nv0_) + 1]] = 1;
+            flag[m_.parent_edge[2 * v]] = 1;
+            flag[m_.parent_edge[2 * v + 1]] = 1;
           }
           for (std::size_t c = 0; c < cells_before; ++c) {
             const VertexId *x = m_.cell(CellId(c));
@@ -201,6 +206,7 @@ private:
       m_.cells.reserve(cap * N);
       m_.stage.reserve(cap);
       m_.tag.reserve(cap);
+      m_.generation.reserve(cap);
     }
   }
 
@@ -221,17 +227,18 @@ private:
     double mid[Dim];
     for (int k2 = 0; k2 < Dim; ++k2) mid[k2] = 0.5 * (p[k2] + q[k2]);
     m_.coords.insert(m_.coords.end(), mid, mid + Dim);
-    parents_.push_back(a);
-    parents_.push_back(b);
+    m_.parent_edge.push_back(a);
+    m_.parent_edge.push_back(b);
     endpoint_.push_back(0);
     endpoint_[a] = endpoint_[b] = 1;
     return next;
   }
 
-  void append(const VertexId *x, Stage s, int t, CellId source) {
+  void append(const VertexId *x, Stage s, int t, std::uint16_t g, CellId source) {
     m_.cells.insert(m_.cells.end(), x, x + N);
     m_.stage.push_back(s);
     m_.tag.push_back(std::uint8_t(t));
+    m_.generation.push_back(g);
     origin_.push_back(source < nc0_ ? source : origin_[source - nc0_]);
   }
 
@@ -242,8 +249,12 @@ private:
     std::copy(slot, slot + N, x);
     const Stage s = m_.stage[c];
     const int t = m_.tag[c];
+    const std::uint16_t g = m_.generation[c];
+    if (g == std::numeric_limits<std::uint16_t>::max())
+      throw CheckError("a cell would pass 65535 generations of bisection");
+    m_.generation[c] = std::uint16_t(g + 1);
     if (logging_) {
-      UndoEntry u{c, {}, s, std::uint8_t(t)};
+      UndoEntry u{c, {}, s, std::uint8_t(t), g};
       std::copy(x, x + N, u.x);
       log_.push_back(u);
     }
@@ -254,7 +265,7 @@ private:
       const int t2 = maubach_child_tag(t, Dim);
       std::copy(c1, c1 + N, m_.cell(c));
       m_.tag[c] = std::uint8_t(t2);
-      append(c2, Stage::Maubach, t2, c);
+      append(c2, Stage::Maubach, t2, std::uint16_t(g + 1), c);
       return;
     }
     if constexpr (Dim >= 3) bisect_stage1(c, x, t);
@@ -272,7 +283,7 @@ private:
     std::copy(c1, c1 + N, m_.cell(c));
     m_.stage[c] = child_stage;
     m_.tag[c] = std::uint8_t(child_tag);
-    append(c2, child_stage, child_tag, c);
+    append(c2, child_stage, child_tag, m_.generation[c], c);
   }
 
   void undo() {
@@ -280,7 +291,10 @@ private:
       std::copy(it->x, it->x + N, m_.cell(it->c));
       m_.stage[it->c] = it->s;
       m_.tag[it->c] = it->t;
+      m_.generation[it->c] = it->g;
     }
+    m_.generation.resize(nc0_);
+    m_.parent_edge.resize(2 * nv0_);
     m_.cells.resize(nc0_ * N);
     m_.stage.resize(nc0_);
     m_.tag.resize(nc0_);
@@ -299,6 +313,8 @@ private:
         for (std::size_t j = 0; j < k; ++j)
           a.values[(nc0_ + i) * k + j] = a.values[std::size_t(origin_[i]) * k + j];
     }
+    const VertexId *parents = m_.parent_edge.data() + 2 * nv0_;
+    const std::size_t made = m_.num_vertices() - nv0_;
     for (DataArray &a : m_.point_data) {
       const std::size_t k = a.components;
       if (is_label_array(a.name)) {
@@ -309,18 +325,18 @@ private:
         // Integer labels: the value both ends share, else the sentinel.
         const double none = label_sentinel(a.type);
         a.values.resize(m_.num_vertices() * k);
-        for (std::size_t i = 0; i < parents_.size() / 2; ++i)
+        for (std::size_t i = 0; i < made; ++i)
           for (std::size_t j = 0; j < k; ++j) {
-            const double p = a.values[parents_[2 * i] * k + j], q = a.values[parents_[2 * i + 1] * k + j];
+            const double p = a.values[parents[2 * i] * k + j], q = a.values[parents[2 * i + 1] * k + j];
             a.values[(nv0_ + i) * k + j] = p == q ? p : none;
           }
         continue;
       }
       a.values.resize(m_.num_vertices() * k);
-      for (std::size_t i = 0; i < parents_.size() / 2; ++i)
+      for (std::size_t i = 0; i < made; ++i)
         for (std::size_t j = 0; j < k; ++j)
-          a.values[(nv0_ + i) * k + j] = 0.5 * (a.values[parents_[2 * i] * k + j] +
-                                                a.values[parents_[2 * i + 1] * k + j]);
+          a.values[(nv0_ + i) * k + j] = 0.5 * (a.values[parents[2 * i] * k + j] +
+                                                a.values[parents[2 * i + 1] * k + j]);
     }
   }
 
@@ -329,6 +345,7 @@ private:
     VertexId x[N];
     Stage s;
     std::uint8_t t;
+    std::uint16_t g;
   };
 
   Mesh &m_;
@@ -338,7 +355,6 @@ private:
   bool logging_ = false;
   MidpointMap mids_;
   std::vector<CellId> origin_;    // per appended cell: the input cell it descends from
-  std::vector<VertexId> parents_; // per new vertex: the two ends of its edge
   std::vector<std::uint8_t> endpoint_; // per vertex: 1 if an end of an edge bisected so far
   std::vector<UndoEntry> log_;
 };

@@ -93,6 +93,7 @@ void encode_state(Mesh &mesh) {
       }
       set_array(mesh.cell_data, std::move(rank));
     }
+    encode_tree(mesh);
   }
 }
 
@@ -107,6 +108,7 @@ void strip_state(Mesh &mesh) {
     return a.name == kStateArray || a.name == kOrderArray || a.name == kStageArray ||
            a.name == kTagArray || a.name == kMarkingArray || a.name == kEdgeRankArray;
   });
+  strip_tree(mesh);
 }
 
 bool decode_state(Mesh &mesh, const std::string &path) {
@@ -125,7 +127,10 @@ bool decode_state(Mesh &mesh, const std::string &path) {
                                    " and " + mesh.cell_data[std::size_t(i)].name);
   }
   int present = (io >= 0) + (is >= 0) + (it >= 0) + (im >= 0);
-  if (present == 0 && ip < 0) return false;
+  if (present == 0 && ip < 0) {
+    strip_tree(mesh); // a tree without the state it belongs to means nothing
+    return false;
+  }
   if (ip < 0 && present != 4)
     throw InputError(path, std::string("bisection state is incomplete: expected cell arrays ") +
                                kStateArray + " and " + kMarkingArray + " (or " + kOrderArray +
@@ -221,6 +226,7 @@ bool decode_state(Mesh &mesh, const std::string &path) {
   for (int i : {io, is, it, im, ir, ip})
     if (i >= 0) mesh.cell_data[i].name.clear();
   std::erase_if(mesh.cell_data, [](const DataArray &a) { return a.name.empty(); });
+  decode_tree(mesh, path);
   return true;
 }
 

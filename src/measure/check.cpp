@@ -118,9 +118,9 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
   Walk(const Mesh &mesh_, const std::vector<std::int8_t> *signs_) : mesh(mesh_), signs(signs_) {
     const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
     if (nc * M >= std::size_t(kSideBit))
-      throw std::length_error("mesh too large for 32-bit sub-simplex references");
+      throw ResourceError("", "mesh too large for the 32-bit sub-simplex references of the checks");
     if (SideOnly && nv >= std::size_t(kSideBit))
-      throw std::length_error("mesh too large for 31-bit vertex ids");
+      throw ResourceError("", "mesh too large for the 31-bit vertex ids of the final check");
     start.assign(nv + 1, 0);
     for (std::size_t c = 0; c < nc; ++c)
       for (int m = 0; m < M; ++m)

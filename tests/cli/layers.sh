@@ -9,7 +9,7 @@ cd "$ROOT"
 declare -A layer_of=(
   [mesh]=core [error]=core
   [check]=measure [measure]=measure
-  [mark]=engine [refine]=engine [driver]=engine [indicator]=engine
+  [mark]=engine [refine]=engine [driver]=engine [indicator]=engine [coarsen]=engine
   [io]=io [state]=io [output]=io
   [region]=region
   [colour]=tools [extrude]=tools [slice]=tools [generate]=tools [bisect]=all

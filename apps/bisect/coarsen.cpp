@@ -1,0 +1,164 @@
+// bisect coarsen: read, undo bisections along the tree where marked, check, write.
+#include "cli.hpp"
+
+#include "bisect/coarsen.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+
+namespace fs = std::filesystem;
+
+namespace bisect::cli {
+namespace {
+
+struct CoarsenArgs {
+  std::string input, output, indicator, region;
+  double below = std::nan("");
+  bool all = false, force = false, check = false;
+  int passes = 1;
+  std::vector<std::string> sums;
+  CommonFlags flags;
+};
+
+// The cells that may be merged away: indicator < below (a point array: a
+// cell's value is the max of its vertices'), or touching the region, or all.
+std::vector<char> marked_cells(const Mesh &mesh, const CoarsenArgs &a) {
+  const std::size_t nc = mesh.num_cells();
+  std::vector<char> marks(nc, 0);
+  if (a.all) {
+    std::fill(marks.begin(), marks.end(), 1);
+  } else if (!a.region.empty()) {
+    auto region = read_region(a.region, mesh.dim);
+    for (CellId c : select_cells(mesh, *region)) marks[c] = 1;
+  } else {
+    // A cell array, or a point array (a cell takes its vertices' max).
+    const std::vector<double> values = cell_indicator(mesh, a.indicator, a.input);
+    for (CellId c : mark_by_indicator(values, IndicatorRule::Below, a.below, a.input)) marks[c] = 1;
+  }
+  return marks;
+}
+
+int run_coarsen(const CoarsenArgs &a) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const bool quiet = a.flags.quiet;
+  if (!a.indicator.empty() && std::isnan(a.below))
+    throw UsageError("--indicator needs --below X (cells whose value is below X are coarsened)");
+  if (a.indicator.empty() && !std::isnan(a.below))
+    throw UsageError("--below needs --indicator NAME");
+  const std::string out =
+      a.output.empty() ? fs::path(a.input).stem().string() + ".coarsened.vtu" : a.output;
+  check_extension(out);
+  OutputSet outputs({a.input, a.region}, a.force);
+  const int h_mesh = outputs.add(out);
+
+  Mesh mesh = load_mesh(a.input);
+  check_output_format(out, mesh.dim);
+  const std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
+  const std::vector<char> marks = marked_cells(mesh, a);
+  if (!quiet) {
+    std::cerr << "bisect: " << a.input << ": " << mesh.dim << "D, " << with_commas(cells0)
+              << " cells, " << with_commas(verts0) << " vertices\n";
+    if (!mesh.marked() || !mesh.has_tree())
+      std::cerr << "bisect: " << a.input
+                << " carries no bisection tree (bisect:generation, bisect:parent_a/b): "
+                   "nothing to coarsen\n";
+  }
+  const Invariants before = measure_invariants(mesh, a.check);
+
+  CoarsenOptions options;
+  options.passes = a.passes;
+  options.sum_arrays = a.sums;
+  auto t_pass = std::chrono::steady_clock::now();
+  auto on_pass = [&](const CoarsenPass &p) {
+    if (!quiet) {
+      char buf[256];
+      std::snprintf(buf, sizeof buf, "pass %d%s: %s cells, %s vertices removed, %.2f s\n", p.pass,
+                    a.passes ? ("/" + std::to_string(a.passes)).c_str() : "", with_commas(p.cells).c_str(),
+                    with_commas(p.removed_vertices).c_str(), seconds_since(t_pass));
+      std::cerr << buf;
+    }
+    t_pass = std::chrono::steady_clock::now();
+  };
+  const CoarsenResult result = coarsen(mesh, marks, options, on_pass);
+
+  // The coarsened mesh covers the input's domain exactly and conforms.
+  const CheckResult check = a.check ? check_conformity(mesh, &before) : check_refined(mesh, before);
+  if (!check.ok) {
+    std::cerr << "bisect: internal check failed after coarsening: " << check.failure
+              << "; no output written\n";
+    return kExitCheck;
+  }
+  write_output_mesh(outputs, h_mesh, mesh);
+  outputs.commit();
+  const double total = seconds_since(t_start);
+  if (a.flags.json) {
+    nlohmann::json j;
+    j["input"] = a.input;
+    j["output"] = out;
+    j["dim"] = mesh.dim;
+    j["passes"] = result.passes;
+    j["initial_cells"] = cells0;
+    j["initial_vertices"] = verts0;
+    j["cells"] = mesh.num_cells();
+    j["vertices"] = mesh.num_vertices();
+    j["removed_vertices"] = result.removed_vertices;
+    j["merged_pairs"] = result.merged_pairs;
+    j["seconds"] = total;
+    print_json(j);
+  }
+  if (!quiet)
+    std::cerr << "bisect: wrote " << out << " (" << with_commas(mesh.num_cells()) << " cells, "
+              << with_commas(result.removed_vertices) << " vertices removed) in " << std::fixed
+              << std::setprecision(2) << total << " s\n";
+  return kExitOk;
+}
+
+} // namespace
+
+Command add_coarsen(CLI::App &app) {
+  auto a = std::make_shared<CoarsenArgs>();
+  auto *cmd = app.add_subcommand(
+      "coarsen", "Undo bisections where marked: remove vertices made by refinement, pass by pass.");
+  cmd->footer("Example: bisect coarsen ball.refined.vtu --all -n 3 -o ball-3.vtu\n"
+              "Needs a file written by bisect refine (or coarsen): the bisection tree travels as "
+              "the arrays bisect:generation, bisect:parent_a and bisect:parent_b. A pass removes "
+              "every vertex made by bisection whose cells are all marked and all children of its "
+              "bisection, merging them back into their parents; vertices of the original mesh are "
+              "never removed. Cell arrays: the children's common value, else their mean (--sum: "
+              "their sum). Before writing, a check: no degenerate or folded cell, the input's "
+              "volume and boundary measure (exit 2 otherwise).\n" +
+              std::string(kExitCodesHelp));
+  cmd->add_option("input", a->input, "Input mesh (.vtu or .msh) with its bisection tree")->required();
+  auto *ind = cmd->add_option("--indicator", a->indicator,
+                              "Cell array (or point array: a cell takes its vertices' max) whose "
+                              "value marks a cell when below --below");
+  cmd->add_option("--below", a->below, "Threshold for --indicator");
+  auto *reg = cmd->add_option("--region,-r", a->region,
+                              "Region spec (JSON): cells touching it are marked");
+  auto *all = cmd->add_flag("--all", a->all, "Mark every cell");
+  ind->excludes(reg)->excludes(all);
+  reg->excludes(all);
+  cmd->add_option("--passes,-n", a->passes,
+                  "Coarsening passes (default 1; 0: until a pass removes nothing). A pass "
+                  "undoes one level of the bisection tree, which can take more passes than "
+                  "refinement took iterations")
+      ->check(CLI::Range(0, 100000));
+  cmd->add_option("--sum", a->sums, "Cell array whose parent value is the children's sum "
+                                    "(repeatable)");
+  cmd->add_option("--output,-o", a->output,
+                  "Output mesh (.vtu or .msh); default <input stem>.coarsened.vtu here");
+  cmd->add_flag("--force,-f", a->force, "Overwrite existing output files (never the input)");
+  cmd->add_flag("--check", a->check,
+                "Full conformity check (and Euler characteristic) instead of the cheap one");
+  add_common_flags(cmd, a->flags);
+  return {cmd, [a] {
+            if (a->indicator.empty() && a->region.empty() && !a->all)
+              throw UsageError("coarsen: give --indicator NAME --below X, --region SPEC or --all");
+            return run_coarsen(*a);
+          }};
+}
+
+} // namespace bisect::cli

@@ -1,0 +1,439 @@
+// Coarsening along the bisection tree (ALGORITHMS.md §10), the inverse of
+// refine.cpp. A pass: find the created vertices whose whole star is marked
+// and made of sibling pairs, pair the siblings by re-bisecting each
+// reconstructed parent and comparing the children, replace every pair by its
+// parent, and compact the removed cells and vertices out.
+//
+// Undo rules. Every child knows where its bisection put the new vertex z:
+//   Maubach child, tag d':  z = y[d], d = d' + 1 if d' < n else 1 (§10);
+//   Stage 1 child (Opposite, tag t' >= 1): z = y[0] (numbering.hpp);
+//   Stage 1 child that entered Maubach, (alpha, gamma, beta, z, new...)_2:
+//   z = y[3], the same index as for a Maubach child of tag 2.
+// So a cell has one bisection vertex, and the stars of two removable
+// vertices share no cell. The parent candidates of a child y, with e the end
+// of z's parent edge y does not hold:
+//   Maubach parent (§10): y with y[d] replaced by e when y[0] is an end, and
+//   (e, y0 .. y(d-1), y(d+1) .. yn) when y[d-1] is one;
+//   Stage 1 parent of an Opposite child (z, new.., S\p): (new.., S) with e
+//   put back at any of the places in S\p (the child keeps S's order);
+//   Stage 1 parent of a child that entered Maubach: (new.., S) with S any
+//   order of {alpha, gamma, beta, e} (triangle_tuple forgets the order).
+// A candidate is taken only when bisecting it (the kernels of refine.cpp:
+// maubach_children, opposite_children) splits the edge {a, b} at z into
+// exactly y and a cell of z's star, so every merge is exact; among several
+// parents with the same two children (e.g. a tuple and its reflection) the
+// first found is kept, and they are the same for all later refinement.
+#include "bisect/coarsen.hpp"
+
+#include "bisect/mark.hpp"
+#include "core/dimension.hpp"
+#include "core/numbering.hpp"
+
+#include <algorithm>
+#include <unordered_set>
+
+namespace bisect {
+
+namespace {
+
+template <int Dim> class Coarsener {
+  static constexpr int N = Dim + 1;
+
+public:
+  Coarsener(Mesh &mesh, std::vector<char> &marks, const CoarsenOptions &options)
+      : m_(mesh), order_(edge_order(mesh)), marks_(marks) {
+    for (const DataArray &a : mesh.cell_data)
+      sum_.push_back(std::find(options.sum_arrays.begin(), options.sum_arrays.end(), a.name) !=
+                     options.sum_arrays.end());
+  }
+
+  CoarsenPass run_pass() {
+    CoarsenPass report;
+    find_merges();
+    report.removed_vertices = removed_count_;
+    report.merged_pairs = merges_.size();
+    if (!merges_.empty()) {
+      merge_cells();
+      remove_vertices();
+    }
+    report.cells = m_.num_cells();
+    report.vertices = m_.num_vertices();
+    return report;
+  }
+
+private:
+  struct Merge {
+    CellId keep, drop;
+    VertexId x[N];
+    Stage stage;
+    std::uint8_t tag;
+  };
+
+  // Index in a child's tuple of the vertex its bisection made; -1 when the
+  // state is that of no child.
+  static int new_vertex_index(Stage s, int t) {
+    if (s == Stage::Opposite) return t >= 1 ? 0 : -1;
+    return t < Dim ? t + 1 : 1;
+  }
+
+  static bool is_edge(VertexId p, VertexId q, VertexId a, VertexId b) {
+    return (p == a && q == b) || (p == b && q == a);
+  }
+
+  // Bisects the candidate parent (x, s, t) symbolically; false when its
+  // refinement edge is not {a, b}.
+  bool bisect_as(const VertexId *x, Stage s, int t, VertexId z, VertexId a, VertexId b,
+                 VertexId *c1, VertexId *c2, Stage &cs, int &ct) const {
+    if (s == Stage::Maubach) {
+      if (!is_edge(x[0], x[t], a, b)) return false;
+      maubach_children<Dim>(x, t, z, c1, c2);
+      cs = Stage::Maubach;
+      ct = maubach_child_tag(t, Dim);
+      return true;
+    }
+    if constexpr (Dim >= 3) {
+      const EdgePick e = opposite_edge(order_, x, Dim, t);
+      if (!is_edge(x[e.first], x[e.second], a, b)) return false;
+      opposite_children(order_, x, Dim, t, e, z, c1, c2, cs, ct);
+      return true;
+    }
+    return false;
+  }
+
+  // Whether tuples p and q (both with state (s, t)) bisect alike: equal, or
+  // (not exact) a Maubach tuple and its reflection (§1), or Stage 1 tuples
+  // with the same new vertices and the same old sub-simplex in another order
+  // (its consistent edge does not depend on the order, and the children differ
+  // only by reflections).
+  static bool same_cell(const VertexId *p, const VertexId *q, Stage s, int t, bool exact) {
+    if (std::equal(p, p + N, q)) return true;
+    if (exact) return false;
+    if (s == Stage::Maubach)
+      return std::equal(p, p + t + 1, std::reverse_iterator<const VertexId *>(q + t + 1)) &&
+             std::equal(p + t + 1, p + N, q + t + 1);
+    if (!std::equal(p, p + t, q)) return false;
+    VertexId a[N], b[N];
+    std::copy(p + t, p + N, a);
+    std::copy(q + t, q + N, b);
+    std::sort(a, a + N - t);
+    std::sort(b, b + N - t);
+    return std::equal(a, a + N - t, b);
+  }
+
+  // The cell of `star` (unpaired, other than y) that is c with state (s, t)
+  // and generation g (see same_cell); -1 when there is none.
+  std::size_t find_in_star(const CellId *star, std::size_t k, const std::vector<char> &paired,
+                           std::size_t self, const VertexId *c, Stage s, int t, std::uint16_t g,
+                           bool exact) const {
+    for (std::size_t j = 0; j < k; ++j) {
+      if (j == self || paired[j]) continue;
+      const CellId o = star[j];
+      if (m_.stage[o] != s || m_.tag[o] != t || m_.generation[o] != g) continue;
+      if (same_cell(c, m_.cell(o), s, t, exact)) return j;
+    }
+    return std::size_t(-1);
+  }
+
+  // Tries candidate parent (x, s, t) for star[i]: when it bisects into
+  // star[i] and another unpaired cell of the star, records the merge.
+  bool try_parent(const VertexId *x, Stage s, int t, VertexId z, VertexId a, VertexId b,
+                  const CellId *star, std::size_t k, std::size_t i, std::vector<char> &paired,
+                  std::vector<Merge> &out) const {
+    VertexId c1[N], c2[N];
+    Stage cs;
+    int ct;
+    if (!bisect_as(x, s, t, z, a, b, c1, c2, cs, ct)) return false;
+    const CellId y = star[i];
+    if (m_.stage[y] != cs || m_.tag[y] != ct) return false;
+    const VertexId *yx = m_.cell(y);
+    const VertexId *sibling;
+    if (same_cell(c1, yx, cs, ct, exact_)) sibling = c2;
+    else if (same_cell(c2, yx, cs, ct, exact_)) sibling = c1;
+    else return false;
+    const std::size_t j = find_in_star(star, k, paired, i, sibling, cs, ct, m_.generation[y], exact_);
+    if (j == std::size_t(-1)) return false;
+    paired[i] = paired[j] = 1;
+    Merge mg{std::min(y, star[j]), std::max(y, star[j]), {}, s, std::uint8_t(t)};
+    std::copy(x, x + N, mg.x);
+    out.push_back(mg);
+    return true;
+  }
+
+  bool pair_maubach(VertexId z, VertexId a, VertexId b, const CellId *star, std::size_t k,
+                    std::size_t i, std::vector<char> &paired, std::vector<Merge> &out) const {
+    const CellId y = star[i];
+    if (m_.stage[y] != Stage::Maubach) return false;
+    const VertexId *yx = m_.cell(y);
+    const int d = new_vertex_index(Stage::Maubach, m_.tag[y]);
+    auto other = [&](VertexId v) { return v == a ? b : v == b ? a : kNoVertex; };
+    VertexId x[N];
+    if (const VertexId e = other(yx[0]); e != kNoVertex) {
+      std::copy(yx, yx + N, x);
+      x[d] = e;
+      if (try_parent(x, Stage::Maubach, d, z, a, b, star, k, i, paired, out)) return true;
+    }
+    if (const VertexId e = other(yx[d - 1]); e != kNoVertex) {
+      x[0] = e;
+      std::copy(yx, yx + d, x + 1);
+      std::copy(yx + d + 1, yx + N, x + d + 1);
+      if (try_parent(x, Stage::Maubach, d, z, a, b, star, k, i, paired, out)) return true;
+    }
+    return false;
+  }
+
+  bool pair_stage1(VertexId z, VertexId a, VertexId b, const CellId *star, std::size_t k,
+                   std::size_t i, std::vector<char> &paired, std::vector<Merge> &out) const {
+    if constexpr (Dim < 3) {
+      return false;
+    } else {
+    const CellId y = star[i];
+    const VertexId *yx = m_.cell(y);
+    const int ty = m_.tag[y];
+    VertexId x[N];
+    if (m_.stage[y] == Stage::Opposite) {
+      // y = (z, new.., S\p) with ty new vertices; the parent has ty - 1.
+      const int t = ty - 1, old = N - ty; // |S \ p|
+      VertexId e = kNoVertex;
+      for (int j = ty; j < N; ++j)
+        if (yx[j] == a || yx[j] == b) e = yx[j] == a ? b : a;
+      if (e == kNoVertex) return false;
+      std::copy(yx + 1, yx + ty, x);
+      for (int place = 0; place <= old; ++place) {
+        VertexId *s = x + t;
+        std::copy(yx + ty, yx + ty + place, s);
+        s[place] = e;
+        std::copy(yx + ty + place, yx + N, s + place + 1);
+        if (try_parent(x, Stage::Opposite, t, z, a, b, star, k, i, paired, out)) return true;
+      }
+      return false;
+    }
+    if (ty != 2) return false;
+    // y = (alpha, gamma, beta, z, new..)_2; the parent (new.., S), S of 4.
+    const int t = Dim - 3;
+    VertexId s[4] = {yx[0], yx[1], yx[2], kNoVertex};
+    for (int j = 0; j < 3; ++j)
+      if (yx[j] == a || yx[j] == b) s[3] = yx[j] == a ? b : a;
+    if (s[3] == kNoVertex) return false;
+    std::copy(yx + 4, yx + N, x);
+    std::sort(s, s + 4);
+    do {
+      std::copy(s, s + 4, x + t);
+      if (try_parent(x, Stage::Opposite, t, z, a, b, star, k, i, paired, out)) return true;
+    } while (std::next_permutation(s, s + 4));
+    return false;
+    }
+  }
+
+  // A Maubach cell with tag n made by bisection is (h, z, ...) with h an end
+  // of z's parent edge. An earlier merge may have stored its reflection (the
+  // whole tuple reversed, §1: the same descendants, since the children of a
+  // tag-1 cell do not tell it from its reflection), which puts z at n-1;
+  // turn it back so that z is at 1 where the undo rule looks for it.
+  void orient(VertexId *x) const {
+    auto holds = [&](VertexId z, VertexId h) {
+      return m_.parent_edge[2 * std::size_t(z)] == h || m_.parent_edge[2 * std::size_t(z) + 1] == h;
+    };
+    if (!holds(x[1], x[0]) && holds(x[Dim - 1], x[Dim])) std::reverse(x, x + N);
+  }
+
+  // The merges of this pass: for every created vertex whose star is all
+  // marked children of its bisection, pairs of siblings.
+  void find_merges() {
+    merges_.clear();
+    removed_.assign(m_.num_vertices(), 0);
+    removed_count_ = 0;
+    const std::size_t nv = m_.num_vertices(), nc = m_.num_cells();
+    // start[v]: the star size of v, less the marked children of v's bisection.
+    std::vector<std::uint32_t> degree(nv + 1, 0), children(nv, 0);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const VertexId *x = m_.cell(CellId(c));
+      for (int i = 0; i < N; ++i) ++degree[x[i]];
+      if (!marks_[c] || m_.generation[c] == 0) continue;
+      if (m_.stage[c] == Stage::Maubach && m_.tag[c] == Dim) orient(m_.cell(CellId(c)));
+      const int k = new_vertex_index(m_.stage[c], m_.tag[c]);
+      if (k >= 0 && m_.parent_edge[2 * std::size_t(x[k])] != kNoVertex) ++children[x[k]];
+    }
+    // Bucket the stars of the candidates: offsets in `start`.
+    std::vector<std::uint32_t> &start = degree;
+    std::uint32_t total = 0;
+    for (std::size_t v = 0; v < nv; ++v) {
+      const std::uint32_t d = degree[v];
+      start[v] = total;
+      if (children[v] == d && d > 0 && d % 2 == 0) total += d;
+      else children[v] = 0; // not a candidate
+    }
+    start[nv] = total;
+    std::vector<CellId> stars(total);
+    std::vector<std::uint32_t> &fill = children;
+    for (std::size_t v = 0; v < nv; ++v) fill[v] = fill[v] ? start[v] : 0;
+    for (std::size_t c = 0; c < nc; ++c) {
+      if (!marks_[c] || m_.generation[c] == 0) continue;
+      const int k = new_vertex_index(m_.stage[c], m_.tag[c]);
+      if (k < 0) continue;
+      const VertexId z = m_.cell(CellId(c))[k];
+      if (start[z + 1] > start[z]) stars[fill[z]++] = CellId(c);
+    }
+    std::vector<char> paired;
+    std::vector<Merge> found;
+    for (std::size_t v = 0; v < nv; ++v) {
+      const std::size_t k = start[v + 1] - start[v];
+      if (k == 0) continue;
+      const VertexId z = VertexId(v), a = m_.parent_edge[2 * v], b = m_.parent_edge[2 * v + 1];
+      const CellId *star = stars.data() + start[v];
+      paired.assign(k, 0);
+      found.clear();
+      bool ok = true;
+      for (std::size_t i = 0; i < k && ok; ++i) {
+        if (paired[i]) continue;
+        const CellId y = star[i];
+        // Stage 1 parents come first for a tag-2 Maubach child young enough
+        // to have entered Maubach from Stage 1 (generation <= n - 2).
+        const bool stage1_first = Dim >= 3 && m_.stage[y] == Stage::Maubach && m_.tag[y] == 2 &&
+                                  m_.generation[y] <= Dim - 2;
+        // The parent itself when it is found (children equal to the cells);
+        // else one that bisects alike (same_cell), e.g. after a Stage 1
+        // merge forgot the order of an old sub-simplex.
+        ok = false;
+        for (int pass = 0; pass < 2 && !ok; ++pass) {
+          exact_ = pass == 0;
+          if (stage1_first)
+            ok = pair_stage1(z, a, b, star, k, i, paired, found) ||
+                 pair_maubach(z, a, b, star, k, i, paired, found);
+          else
+            ok = pair_maubach(z, a, b, star, k, i, paired, found) ||
+                 pair_stage1(z, a, b, star, k, i, paired, found);
+        }
+      }
+      if (!ok) continue;
+      merges_.insert(merges_.end(), found.begin(), found.end());
+      removed_[v] = 1;
+      ++removed_count_;
+    }
+  }
+
+  // Each pair becomes its parent in the keep slot; the drop slots are
+  // compacted out (in place: a drop slot is always after its keep slot, so
+  // it is read before anything is written over it).
+  void merge_cells() {
+    const std::size_t nc = m_.num_cells();
+    std::vector<std::uint32_t> slot(nc, kNoCell); // keep: its merge; drop: kNoCell - 1
+    for (std::size_t i = 0; i < merges_.size(); ++i) {
+      slot[merges_[i].keep] = std::uint32_t(i);
+      slot[merges_[i].drop] = kNoCell - 1;
+    }
+    std::size_t w = 0;
+    for (std::size_t c = 0; c < nc; ++c) {
+      const std::uint32_t s = slot[c];
+      if (s == kNoCell - 1) continue;
+      if (s == kNoCell) {
+        std::copy(m_.cell(CellId(c)), m_.cell(CellId(c)) + N, m_.cell(CellId(w)));
+        m_.stage[w] = m_.stage[c];
+        m_.tag[w] = m_.tag[c];
+        m_.generation[w] = m_.generation[c];
+        marks_[w] = marks_[c];
+        for (DataArray &a : m_.cell_data) {
+          const std::size_t k = std::size_t(a.components);
+          std::copy(a.values.begin() + c * k, a.values.begin() + (c + 1) * k, a.values.begin() + w * k);
+        }
+      } else {
+        const Merge &mg = merges_[s];
+        std::copy(mg.x, mg.x + N, m_.cell(CellId(w)));
+        m_.stage[w] = mg.stage;
+        m_.tag[w] = mg.tag;
+        m_.generation[w] = std::uint16_t(m_.generation[c] - 1);
+        marks_[w] = 1;
+        for (std::size_t i = 0; i < m_.cell_data.size(); ++i) {
+          DataArray &a = m_.cell_data[i];
+          const std::size_t k = std::size_t(a.components);
+          for (std::size_t j = 0; j < k; ++j) {
+            const double p = a.values[c * k + j], q = a.values[std::size_t(mg.drop) * k + j];
+            a.values[w * k + j] = sum_[i] ? p + q : p == q ? p : 0.5 * (p + q);
+          }
+        }
+      }
+      ++w;
+    }
+    m_.cells.resize(w * N);
+    m_.stage.resize(w);
+    m_.tag.resize(w);
+    m_.generation.resize(w);
+    marks_.resize(w);
+    for (DataArray &a : m_.cell_data) a.values.resize(w * std::size_t(a.components));
+  }
+
+  void remove_vertices() {
+    const std::size_t nv = m_.num_vertices();
+    std::vector<VertexId> id(nv, kNoVertex);
+    std::size_t w = 0;
+    for (std::size_t v = 0; v < nv; ++v) {
+      if (removed_[v]) continue;
+      id[v] = VertexId(w);
+      std::copy(m_.coords.begin() + v * Dim, m_.coords.begin() + (v + 1) * Dim,
+                m_.coords.begin() + w * Dim);
+      for (DataArray &a : m_.point_data) {
+        const std::size_t k = std::size_t(a.components);
+        std::copy(a.values.begin() + v * k, a.values.begin() + (v + 1) * k, a.values.begin() + w * k);
+      }
+      VertexId p = m_.parent_edge[2 * v], q = m_.parent_edge[2 * v + 1];
+      if (p != kNoVertex) {
+        p = id[p];
+        q = id[q];
+        // Cannot happen for a tree bisect made (a vertex's parents are in
+        // its star until it goes); a vertex that lost one becomes original.
+        if (p == kNoVertex || q == kNoVertex) p = q = kNoVertex;
+      }
+      m_.parent_edge[2 * w] = p;
+      m_.parent_edge[2 * w + 1] = q;
+      ++w;
+    }
+    m_.coords.resize(w * Dim);
+    m_.parent_edge.resize(2 * w);
+    for (DataArray &a : m_.point_data) a.values.resize(w * std::size_t(a.components));
+    for (VertexId &x : m_.cells) x = id[x];
+    if (!m_.edge_rank.empty()) {
+      std::unordered_map<std::uint64_t, std::uint32_t> rank;
+      for (const auto &[key, r] : m_.edge_rank) {
+        const VertexId p = id[key >> 32], q = id[key & 0xffffffffu];
+        if (p != kNoVertex && q != kNoVertex) rank.emplace(edge_key(p, q), r);
+      }
+      m_.edge_rank = std::move(rank);
+    }
+  }
+
+  Mesh &m_;
+  EdgeOrder order_;
+  std::vector<char> &marks_;
+  std::vector<bool> sum_; // per cell array
+  std::vector<Merge> merges_;
+  std::vector<char> removed_; // per vertex, this pass
+  std::size_t removed_count_ = 0;
+  bool exact_ = true; // the matching try_parent uses (same_cell)
+};
+
+} // namespace
+
+CoarsenResult coarsen(Mesh &mesh, const std::vector<char> &marked_cells,
+                      const CoarsenOptions &options,
+                      const std::function<void(const CoarsenPass &)> &on_pass) {
+  if (marked_cells.size() != mesh.num_cells())
+    throw UsageError("coarsen: " + std::to_string(marked_cells.size()) + " marks for " +
+                     std::to_string(mesh.num_cells()) + " cells");
+  CoarsenResult result;
+  if (!mesh.marked() || !mesh.has_tree()) return result;
+  std::vector<char> marks = marked_cells;
+  for (int p = 1; options.passes <= 0 || p <= options.passes; ++p) {
+    CoarsenPass pass = dispatch(mesh.dim, [&]<int D>() {
+      Coarsener<D> c(mesh, marks, options);
+      return c.run_pass();
+    });
+    pass.pass = p;
+    if (on_pass) on_pass(pass);
+    if (pass.removed_vertices == 0) break;
+    result.passes = p;
+    result.removed_vertices += pass.removed_vertices;
+    result.merged_pairs += pass.merged_pairs;
+  }
+  return result;
+}
+
+} // namespace bisect
