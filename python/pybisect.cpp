@@ -423,6 +423,34 @@ py::dict refine(py::object self, const py::object &marked, const py::object &reg
   return out;
 }
 
+// mesh.coarsen(marked=None, passes=1, sum=()): undoes bisections where the
+// whole star of a created vertex is marked (all cells when marked is None).
+py::dict coarsen(py::object self, const py::object &marked, int passes,
+                 const std::vector<std::string> &sum) {
+  PyMesh &m = self.cast<PyMesh &>();
+  BusyGuard guard(m);
+  if (passes < 0) throw bisect::UsageError("coarsen: passes must be 0 (until done) or more");
+  std::vector<char> mask(m.mesh.num_cells(), marked.is_none() ? 1 : 0);
+  if (!marked.is_none())
+    for (CellId c : cells_of(marked, m.mesh.num_cells())) mask[c] = 1;
+  release_views(m);
+  bisect::CoarsenResult r;
+  {
+    py::gil_scoped_release release;
+    bisect::CoarsenOptions options;
+    options.passes = passes;
+    options.sum_arrays = sum;
+    r = bisect::coarsen(m.mesh, mask, options);
+  }
+  py::dict out;
+  out["passes"] = r.passes;
+  out["removed_vertices"] = r.removed_vertices;
+  out["merged_pairs"] = r.merged_pairs;
+  out["cells"] = m.mesh.num_cells();
+  out["vertices"] = m.mesh.num_vertices();
+  return out;
+}
+
 // ---------------------------------------------------------------------------
 // meshio
 
@@ -666,6 +694,12 @@ PYBIND11_MODULE(pybisect, m) {
                              "dict name -> writable float64 view (n,) or (n, k)")
       .def_property_readonly("cell_data", [](py::object self) { return data_views(self, true); },
                              "dict name -> writable float64 view (m,) or (m, k)")
+      .def("coarsen", &coarsen, py::arg("marked") = py::none(), py::arg("passes") = 1,
+           py::arg("sum") = std::vector<std::string>{},
+           "Undo bisections along the bisection tree: a pass removes every created vertex whose "
+           "whole star is marked (marked: boolean mask or cell ids; None: every cell) and pairs "
+           "up into siblings; passes=0 runs until a pass removes nothing. Cell arrays named in "
+           "`sum` are summed, others take the children's common value or their mean.")
       .def("refine", &refine, py::arg("marked") = py::none(), py::arg("region") = py::none(),
            py::arg("depth") = 1, py::arg("marking") = "index", py::arg("max_cells") = 0,
            "refine(marked=None, region=None, depth=1, marking='index', max_cells=0) -> dict\n\n"

@@ -166,3 +166,30 @@ def test_refine_releases_the_gil_and_guards_the_mesh():
     worker.join()
     assert seen_busy
     mesh.check(full=False)
+
+
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_coarsen_undoes_refine(dim):
+    """Refining by a region and coarsening every cell until nothing changes
+    gives the original cells back (as sets of vertex coordinates)."""
+    box = {"type": "box", "min": [0.0] * dim, "max": [0.3] * dim}
+    def cell_set(m):
+        pts = np.asarray(m.points)
+        return {frozenset(tuple(pts[v]) for v in cell) for cell in np.asarray(m.cells)}
+
+    mesh = pybisect.Mesh(*kuhn(dim, 2))
+    before = cell_set(mesh)
+    for _ in range(3):
+        mesh.refine(region=box)
+    assert mesh.num_cells > len(before)
+    r = mesh.coarsen(passes=0)
+    assert r["removed_vertices"] > 0 and r["cells"] == mesh.num_cells
+    assert cell_set(mesh) == before
+    mesh.check()
+    # Partial coarsening stays conforming.
+    mesh.refine(region=box)
+    mesh.refine(region=box)
+    mask = np.zeros(mesh.num_cells, dtype=bool)
+    mask[: mesh.num_cells // 2] = True
+    mesh.coarsen(mask)
+    mesh.check()
