@@ -3,13 +3,13 @@
 // quality measurement timed apart) and peak memory per cell.
 //
 // Usage: bisect_bench [ball.msh] [iterations3d=40] [iterations4d=25]
+#include "bisect/check.hpp"
 #include "bisect/generate.hpp"
 #include "bisect/io.hpp"
 #include "bisect/mark.hpp"
 #include "bisect/measure.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
-#include "bisect/check.hpp"
 
 #include <chrono>
 #include <cstdio>
@@ -28,13 +28,17 @@ long proc_status_kb(const char *field) {
   std::ifstream f("/proc/self/status");
   std::string line;
   while (std::getline(f, line))
-    if (line.rfind(field, 0) == 0) return std::atol(line.c_str() + std::string(field).size());
+    if (line.rfind(field, 0) == 0)
+      return std::atol(line.c_str() + std::string(field).size());
   return -1;
 }
 
-double secs(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+double secs(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
 
-void run(const char *name, Mesh mesh, Marking marking, const std::string &region_json, int iterations) {
+void run(const char *name, Mesh mesh, Marking marking, const std::string &region_json,
+         int iterations) {
   mark_mesh(mesh, marking);
   auto region = parse_region(region_json, mesh.dim, name);
   long rss0 = proc_status_kb("VmRSS:");
@@ -65,8 +69,9 @@ void run(const char *name, Mesh mesh, Marking marking, const std::string &region
               "cells to close: %.3f s\n",
               t_kernel, 2e-6 * bisections / t_kernel, t_refine - t_kernel);
   std::printf("  selection (region tests): %.3f s; total %.3f s\n", t_select, t_select + t_refine);
-  std::printf("  peak RSS %.1f MiB = %.1f bytes/cell; above the pre-refinement RSS: %.1f bytes/cell\n",
-              hwm / 1024.0, hwm * 1024.0 / cells, (hwm - rss0) * 1024.0 / cells);
+  std::printf(
+      "  peak RSS %.1f MiB = %.1f bytes/cell; above the pre-refinement RSS: %.1f bytes/cell\n",
+      hwm / 1024.0, hwm * 1024.0 / cells, (hwm - rss0) * 1024.0 / cells);
   std::fflush(stdout);
 }
 

@@ -4,10 +4,10 @@
 
 #include "bisect/check.hpp"
 #include "bisect/mark.hpp"
-#include "bisect/state.hpp"
 #include "bisect/mesh.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
+#include "bisect/state.hpp"
 
 #include <cstdint>
 #include <cstdio>
@@ -21,8 +21,8 @@ namespace bisect_fuzz {
 // extension so that read_mesh-style dispatch sees the right format.
 inline std::string write_temp(const std::uint8_t *data, std::size_t size, const char *ext) {
   const char *dir = std::getenv("TMPDIR");
-  std::string path = std::string(dir && *dir ? dir : "/tmp") + "/bisect-fuzz-" +
-                     std::to_string(::getpid()) + ext;
+  std::string path =
+      std::string(dir && *dir ? dir : "/tmp") + "/bisect-fuzz-" + std::to_string(::getpid()) + ext;
   std::FILE *f = std::fopen(path.c_str(), "wb");
   if (!f)
     std::abort();
@@ -120,8 +120,9 @@ inline int fuzz_mesh_file(const std::uint8_t *data, std::size_t size, const char
   std::string c = "[";
   for (int d = 0; d < mesh.dim; ++d)
     c += (d ? "," : "") + std::to_string(mesh.coords[d]);
-  const auto region = parse_region(
-      "{\"type\":\"sphere\",\"solid\":true,\"radius\":0.5,\"center\":" + c + "]}", mesh.dim, "fuzz");
+  const auto region =
+      parse_region("{\"type\":\"sphere\",\"solid\":true,\"radius\":0.5,\"center\":" + c + "]}",
+                   mesh.dim, "fuzz");
   RefineCheck how;
   how.iterations = 2;
   how.max_cells = 5000;

@@ -1,7 +1,7 @@
 // libFuzzer target: the bytes describe a tiny mesh, a marking, a region and
 // an iteration count. The mesh is one simplex or a Kuhn mesh (dim 2..4), or
-// the part of it in a subset of its cubes, its vertices perturbed a little, renumbered, its cells shuffled and some of
-// them turned inside out; then prepare_input (inputs it rejects are skipped),
+// the part of it in a subset of its cubes, its vertices perturbed a little, renumbered, its cells
+// shuffled and some of them turned inside out; then prepare_input (inputs it rejects are skipped),
 // mark_mesh and a few iterations of select_cells + refine. After every
 // iteration the mesh must pass check_conformity against the input's volume,
 // boundary measure and Euler characteristic: abort() otherwise.
@@ -15,8 +15,8 @@
 // Sizes are capped so that one run stays around a millisecond: at most 384
 // input cells, at most 2000 cells (4D: 1000) after any iteration (refine
 // undoes an iteration that would pass the cap), at most 6 iterations (4D: 4).
-#include "fuzz_common.hpp"
 #include "bisect/generate.hpp"
+#include "fuzz_common.hpp"
 
 #include <algorithm>
 #include <map>
@@ -86,7 +86,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
   // Header: what shapes the run.
   const int dim = 2 + int(in.below(3));
   const int k = int(in.below(dim == 2 ? 5 : dim == 3 ? 4 : 3)); // 0: one simplex
-  const unsigned marking = in.below(4); // index, longest, sorted, explicit
+  const unsigned marking = in.below(4);                         // index, longest, sorted, explicit
   const unsigned amount = in.below(4); // perturbation: 0 none .. 3 up to 0.3 step
   const int iterations = 1 + int(in.below(dim == 4 ? 4 : 6));
   const unsigned region_type = in.below(4);

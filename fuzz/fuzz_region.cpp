@@ -4,8 +4,8 @@
 // simplex it touches meets its bounds box (select_cells skips cells outside
 // the box, so a wrong box would silently miss cells). Intersections are
 // conservative and are not held to the box.
-#include "fuzz_common.hpp"
 #include "bisect/generate.hpp"
+#include "fuzz_common.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,8 +14,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size) {
   using namespace bisect;
   const std::string text(reinterpret_cast<const char *>(data), size);
-  const bool conservative = text.find("ntersection") != std::string::npos ||
-                            text.find("\\u") != std::string::npos;
+  const bool conservative =
+      text.find("ntersection") != std::string::npos || text.find("\\u") != std::string::npos;
   for (int dim = 2; dim <= 4; ++dim) {
     std::unique_ptr<Region> region;
     try {
@@ -44,8 +44,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
         for (int i = 0; i <= dim; ++i)
           cmin = std::min(cmin, verts[i * dim + d]), cmax = std::max(cmax, verts[i * dim + d]);
         if (cmax < lo[d] || cmin > hi[d])
-          bisect_fuzz::fail("cell " + std::to_string(c) + " touched but outside bounds in coordinate " +
-                            std::to_string(d));
+          bisect_fuzz::fail("cell " + std::to_string(c) +
+                            " touched but outside bounds in coordinate " + std::to_string(d));
       }
     }
   }

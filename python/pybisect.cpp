@@ -54,11 +54,16 @@ PyObject *g_error_type = nullptr;
 
 const char *kind_name(ErrorKind kind) {
   switch (kind) {
-  case ErrorKind::Input: return "input";
-  case ErrorKind::Usage: return "usage";
-  case ErrorKind::Check: return "check";
-  case ErrorKind::Limit: return "limit";
-  case ErrorKind::Resource: return "resource";
+  case ErrorKind::Input:
+    return "input";
+  case ErrorKind::Usage:
+    return "usage";
+  case ErrorKind::Check:
+    return "check";
+  case ErrorKind::Limit:
+    return "limit";
+  case ErrorKind::Resource:
+    return "resource";
   }
   return "input";
 }
@@ -68,13 +73,16 @@ const char *kind_name(ErrorKind kind) {
 std::string one_line(const std::string &text) {
   std::string out;
   for (unsigned char c : text) {
-    if (c == '\n') out += "\\n";
-    else if (c == '\r') out += "\\r";
+    if (c == '\n')
+      out += "\\n";
+    else if (c == '\r')
+      out += "\\r";
     else if (c < 0x20 || c == 0x7f) {
       char buf[8];
       std::snprintf(buf, sizeof buf, "\\x%02X", c);
       out += buf;
-    } else out += char(c);
+    } else
+      out += char(c);
   }
   return out;
 }
@@ -124,8 +132,10 @@ struct ViewBase {
 template <class T> void hand_over(std::weak_ptr<ViewBuffer> &slot, std::vector<T> &values) {
   if (std::shared_ptr<ViewBuffer> buffer = slot.lock()) {
     std::vector<T> &keep = [&]() -> std::vector<T> & {
-      if constexpr (std::is_same_v<T, double>) return buffer->doubles;
-      else return buffer->ids;
+      if constexpr (std::is_same_v<T, double>)
+        return buffer->doubles;
+      else
+        return buffer->ids;
     }();
     keep = std::move(values);
     values = keep;
@@ -136,7 +146,8 @@ template <class T> void hand_over(std::weak_ptr<ViewBuffer> &slot, std::vector<T
 void hand_over_data(std::map<std::string, std::weak_ptr<ViewBuffer>> &slots,
                     std::vector<DataArray> &arrays) {
   for (DataArray &a : arrays)
-    if (auto it = slots.find(a.name); it != slots.end()) hand_over(it->second, a.values);
+    if (auto it = slots.find(a.name); it != slots.end())
+      hand_over(it->second, a.values);
   slots.clear();
 }
 
@@ -159,18 +170,21 @@ py::array make_view(py::handle self, std::weak_ptr<ViewBuffer> &slot, const T *d
   auto *base = new ViewBase{buffer, py::reinterpret_borrow<py::object>(self)};
   py::capsule capsule(base, [](void *p) { delete static_cast<ViewBase *>(p); });
   py::ssize_t count = 1;
-  for (py::ssize_t s : shape) count *= s;
+  for (py::ssize_t s : shape)
+    count *= s;
   // numpy needs a pointer even for an empty array.
   static const T empty{};
   py::array a(py::dtype::of<T>(), shape, {}, count ? data : &empty, capsule);
-  if (!writable) a.attr("setflags")(py::arg("write") = false);
+  if (!writable)
+    a.attr("setflags")(py::arg("write") = false);
   return a;
 }
 
 // Refuses a second operation on a mesh another thread is refining.
 struct BusyGuard {
   explicit BusyGuard(PyMesh &m) : m(m) {
-    if (m.busy) throw bisect::UsageError("the mesh is in use by another thread (refine/check)");
+    if (m.busy)
+      throw bisect::UsageError("the mesh is in use by another thread (refine/check)");
     m.busy = true;
   }
   ~BusyGuard() { m.busy = false; }
@@ -180,13 +194,15 @@ struct BusyGuard {
 };
 
 void check_idle(const PyMesh &m) {
-  if (m.busy) throw bisect::UsageError("the mesh is in use by another thread (refine/check)");
+  if (m.busy)
+    throw bisect::UsageError("the mesh is in use by another thread (refine/check)");
 }
 
 // The invariants of the mesh as read or built; call before it first changes
 // (without the GIL: it walks every facet).
 const bisect::Invariants &original(PyMesh &m) {
-  if (!m.original) m.original = bisect::measure_invariants(m.mesh);
+  if (!m.original)
+    m.original = bisect::measure_invariants(m.mesh);
   return *m.original;
 }
 
@@ -214,7 +230,8 @@ DataArray data_array(const std::string &name, const py::handle &value, std::size
 std::vector<DataArray> data_arrays(const py::object &dict, std::size_t count, const char *what,
                                    const std::string &origin) {
   std::vector<DataArray> out;
-  if (dict.is_none()) return out;
+  if (dict.is_none())
+    return out;
   for (auto item : py::cast<py::dict>(dict))
     out.push_back(data_array(py::cast<std::string>(item.first), item.second, count, what, origin));
   return out;
@@ -240,14 +257,16 @@ void settle_plane(Mesh &mesh, const std::vector<double> &z, const std::string &o
   extent = std::max({extent, std::abs(lo), std::abs(hi)});
   if (!(hi - lo <= 1e-12 * extent) && !z.empty()) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "the triangles are not in one plane z = c (z goes from %.17g to %.17g)",
-                  lo, hi);
+    std::snprintf(buf, sizeof buf,
+                  "the triangles are not in one plane z = c (z goes from %.17g to %.17g)", lo, hi);
     throw bisect::InputError(origin, buf);
   }
-  if (z.empty() || (lo == 0 && hi == 0)) return;
-  mesh.point_data.erase(std::remove_if(mesh.point_data.begin(), mesh.point_data.end(),
-                                       [](const DataArray &a) { return a.name == bisect::kPlaneZArray; }),
-                        mesh.point_data.end());
+  if (z.empty() || (lo == 0 && hi == 0))
+    return;
+  mesh.point_data.erase(
+      std::remove_if(mesh.point_data.begin(), mesh.point_data.end(),
+                     [](const DataArray &a) { return a.name == bisect::kPlaneZArray; }),
+      mesh.point_data.end());
   mesh.point_data.push_back({bisect::kPlaneZArray, 1, z});
 }
 
@@ -276,7 +295,8 @@ std::unique_ptr<PyMesh> mesh_from_arrays(const py::object &points_in, const py::
   if (kind != 'i' && kind != 'u')
     throw bisect::InputError(origin, "cells must be an integer array, not dtype " +
                                          py::cast<std::string>(py::str(cells_any.dtype())));
-  auto cells = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(cells_any);
+  auto cells =
+      py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(cells_any);
   const int dim = int(cells.shape(1)) - 1;
   if (dim < 2 || dim > 4)
     throw bisect::InputError(origin, "cells have " + std::to_string(cells.shape(1)) +
@@ -289,15 +309,18 @@ std::unique_ptr<PyMesh> mesh_from_arrays(const py::object &points_in, const py::
                                          std::to_string(dim) +
                                          (dim == 2 ? " (or 3 with a constant z)" : ""));
   const std::size_t nv = std::size_t(points.shape(0)), nc = std::size_t(cells.shape(0));
-  if (nc == 0) throw bisect::InputError(origin, "no cells");
+  if (nc == 0)
+    throw bisect::InputError(origin, "no cells");
   Mesh mesh;
   mesh.dim = dim;
   mesh.coords.resize(nv * dim);
   std::vector<double> z;
   const double *p = points.data();
   for (std::size_t v = 0; v < nv; ++v) {
-    for (int k = 0; k < dim; ++k) mesh.coords[v * dim + k] = p[v * columns + k];
-    if (columns == 3 && dim == 2) z.push_back(p[v * columns + 2]);
+    for (int k = 0; k < dim; ++k)
+      mesh.coords[v * dim + k] = p[v * columns + k];
+    if (columns == 3 && dim == 2)
+      z.push_back(p[v * columns + 2]);
   }
   mesh.cells.resize(nc * (dim + 1));
   const std::int64_t *c = cells.data();
@@ -310,7 +333,8 @@ std::unique_ptr<PyMesh> mesh_from_arrays(const py::object &points_in, const py::
   }
   mesh.point_data = data_arrays(point_data, nv, "point", origin);
   mesh.cell_data = data_arrays(cell_data, nc, "cell", origin);
-  if (dim == 2 && columns == 3) settle_plane(mesh, z, origin);
+  if (dim == 2 && columns == 3)
+    settle_plane(mesh, z, origin);
   return finish(std::move(mesh), origin);
 }
 
@@ -319,7 +343,8 @@ std::unique_ptr<PyMesh> mesh_from_arrays(const py::object &points_in, const py::
 
 std::vector<CellId> cells_of(const py::object &marked, std::size_t nc) {
   py::array a = py::array::ensure(marked);
-  if (!a) throw bisect::UsageError("marked: expected a boolean mask or an array of cell ids");
+  if (!a)
+    throw bisect::UsageError("marked: expected a boolean mask or an array of cell ids");
   std::vector<CellId> out;
   if (a.dtype().kind() == 'b') {
     auto mask = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(a);
@@ -328,14 +353,16 @@ std::vector<CellId> cells_of(const py::object &marked, std::size_t nc) {
                                std::to_string(nc) + "), got " +
                                std::to_string(mask.ndim() == 1 ? mask.shape(0) : mask.size()));
     for (std::size_t c = 0; c < nc; ++c)
-      if (mask.data()[c]) out.push_back(CellId(c));
+      if (mask.data()[c])
+        out.push_back(CellId(c));
     return out;
   }
   if (a.dtype().kind() != 'i' && a.dtype().kind() != 'u' && a.size() != 0)
     throw bisect::UsageError("marked: expected a boolean mask or integer cell ids, not dtype " +
                              py::cast<std::string>(py::str(a.dtype())));
   auto ids = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(a);
-  if (ids.ndim() > 1) throw bisect::UsageError("marked: cell ids must be a 1-dimensional array");
+  if (ids.ndim() > 1)
+    throw bisect::UsageError("marked: cell ids must be a 1-dimensional array");
   for (py::ssize_t i = 0; i < ids.size(); ++i) {
     const std::int64_t c = ids.data()[i];
     if (c < 0 || std::uint64_t(c) >= nc)
@@ -364,7 +391,8 @@ std::unique_ptr<bisect::Region> region_of(const py::object &region, int dim) {
     throw bisect::UsageError("region: expected a dict, JSON text or a spec file's path");
   const std::string s = py::cast<std::string>(region);
   const auto first = s.find_first_not_of(" \t\r\n");
-  if (first != std::string::npos && s[first] == '{') return bisect::parse_region(s, dim, "<region>");
+  if (first != std::string::npos && s[first] == '{')
+    return bisect::parse_region(s, dim, "<region>");
   return bisect::read_region(s, dim);
 }
 
@@ -374,14 +402,18 @@ py::dict refine(py::object self, const py::object &marked, const py::object &reg
   BusyGuard guard(m);
   const std::optional<bisect::Marking> marking = bisect::parse_marking(marking_name);
   if (!marking)
-    throw bisect::UsageError("unknown marking '" + marking_name + "' (expected index, longest or sorted)");
+    throw bisect::UsageError("unknown marking '" + marking_name +
+                             "' (expected index, longest or sorted)");
   if (marked.is_none() && region.is_none())
     throw bisect::UsageError("refine: give marked cells, a region, or both");
-  if (depth < 1) throw bisect::UsageError("refine: depth must be at least 1");
+  if (depth < 1)
+    throw bisect::UsageError("refine: depth must be at least 1");
   std::vector<CellId> selected;
-  if (!marked.is_none()) selected = cells_of(marked, m.mesh.num_cells());
+  if (!marked.is_none())
+    selected = cells_of(marked, m.mesh.num_cells());
   std::unique_ptr<bisect::Region> spec;
-  if (!region.is_none()) spec = region_of(region, m.mesh.dim);
+  if (!region.is_none())
+    spec = region_of(region, m.mesh.dim);
 
   release_views(m);
   bisect::RefineResult r;
@@ -400,13 +432,15 @@ py::dict refine(py::object self, const py::object &marked, const py::object &reg
     if (std::string why = bisect::memory_shortfall(m.mesh, selected.size(), 0); !why.empty())
       throw bisect::Error(ErrorKind::Limit, {}, "refine: " + why);
     bisect::RefineLimits limits;
-    if (max_cells) limits.max_cells = max_cells;
+    if (max_cells)
+      limits.max_cells = max_cells;
     r = bisect::refine_marked(m.mesh, selected, depth, limits);
   }
   if (r.precision_reached)
-    throw bisect::Error(ErrorKind::Limit, {},
-                        "refine: it would bisect an edge finer than doubles resolve (extent below "
-                        "2^-40 of its coordinates' magnitude, or below 2^-100); nothing was bisected");
+    throw bisect::Error(
+        ErrorKind::Limit, {},
+        "refine: it would bisect an edge finer than doubles resolve (extent below "
+        "2^-40 of its coordinates' magnitude, or below 2^-100); nothing was bisected");
   if (r.limit_reached)
     throw bisect::Error(ErrorKind::Limit, {},
                         "refine: it would pass " +
@@ -429,10 +463,12 @@ py::dict coarsen(py::object self, const py::object &marked, int passes,
                  const std::vector<std::string> &sum) {
   PyMesh &m = self.cast<PyMesh &>();
   BusyGuard guard(m);
-  if (passes < 0) throw bisect::UsageError("coarsen: passes must be 0 (until done) or more");
+  if (passes < 0)
+    throw bisect::UsageError("coarsen: passes must be 0 (until done) or more");
   std::vector<char> mask(m.mesh.num_cells(), marked.is_none() ? 1 : 0);
   if (!marked.is_none())
-    for (CellId c : cells_of(marked, m.mesh.num_cells())) mask[c] = 1;
+    for (CellId c : cells_of(marked, m.mesh.num_cells()))
+      mask[c] = 1;
   release_views(m);
   bisect::CoarsenResult r;
   {
@@ -462,18 +498,21 @@ const char *kNoMeshio4d =
 
 py::object to_meshio(const PyMesh &m) {
   check_idle(m);
-  if (m.mesh.dim == 4) throw bisect::UsageError(std::string("to_meshio: ") + kNoMeshio4d);
+  if (m.mesh.dim == 4)
+    throw bisect::UsageError(std::string("to_meshio: ") + kNoMeshio4d);
   py::object meshio = py::module_::import("meshio");
   // What save_mesh writes: cells positively oriented, the state as bisect:* arrays.
   Mesh copy = m.mesh;
-  if (copy.marked()) bisect::encode_state(copy);
+  if (copy.marked())
+    bisect::encode_state(copy);
   const std::size_t nv = copy.num_vertices(), nc = copy.num_cells();
   const int dim = copy.dim;
   // Points are 3D, as in the .vtu file: a 2D mesh gets z = 0 or its bisect:z.
   py::array_t<double> points({py::ssize_t(nv), py::ssize_t(3)});
   const DataArray *plane = nullptr;
   for (const DataArray &a : copy.point_data)
-    if (a.name == bisect::kPlaneZArray) plane = &a;
+    if (a.name == bisect::kPlaneZArray)
+      plane = &a;
   double *p = points.mutable_data();
   for (std::size_t v = 0; v < nv; ++v)
     for (int k = 0; k < 3; ++k)
@@ -481,15 +520,16 @@ py::object to_meshio(const PyMesh &m) {
   py::array_t<std::int64_t> cells({py::ssize_t(nc), py::ssize_t(dim + 1)});
   std::copy(copy.cells.begin(), copy.cells.end(), cells.mutable_data());
   auto as_array = [](const DataArray &a, std::size_t count) {
-    py::array_t<double> out = a.components == 1
-                                  ? py::array_t<double>(py::ssize_t(count))
-                                  : py::array_t<double>({py::ssize_t(count), py::ssize_t(a.components)});
+    py::array_t<double> out =
+        a.components == 1 ? py::array_t<double>(py::ssize_t(count))
+                          : py::array_t<double>({py::ssize_t(count), py::ssize_t(a.components)});
     std::copy(a.values.begin(), a.values.end(), out.mutable_data());
     return out;
   };
   py::dict point_data, cell_data;
   for (const DataArray &a : copy.point_data)
-    if (&a != plane) point_data[py::str(a.name)] = as_array(a, nv);
+    if (&a != plane)
+      point_data[py::str(a.name)] = as_array(a, nv);
   for (const DataArray &a : copy.cell_data) {
     py::list blocks;
     blocks.append(as_array(a, nc));
@@ -509,8 +549,10 @@ std::unique_ptr<PyMesh> from_meshio(const py::object &m) {
   std::string type;
   for (auto b : blocks) {
     const std::string t = py::cast<std::string>(b.attr("type"));
-    if (t == "tetra") type = t;
-    else if (t == "triangle" && type.empty()) type = t;
+    if (t == "tetra")
+      type = t;
+    else if (t == "triangle" && type.empty())
+      type = t;
   }
   if (type.empty()) {
     throw bisect::InputError(origin, std::string("no triangle or tetra cells (") +
@@ -535,15 +577,18 @@ std::unique_ptr<PyMesh> from_meshio(const py::object &m) {
       numeric = numeric && (k == 'f' || k == 'i' || k == 'u' || k == 'b');
       parts.append(a);
     }
-    if (numeric) cell_data[item.first] = np.attr("concatenate")(parts);
+    if (numeric)
+      cell_data[item.first] = np.attr("concatenate")(parts);
   }
   py::dict point_data;
   for (auto item : py::cast<py::dict>(m.attr("point_data"))) {
     // Gmsh's node entities: meaningless once vertices are added (read() has no such array).
-    if (py::cast<std::string>(item.first) == "gmsh:dim_tags") continue;
+    if (py::cast<std::string>(item.first) == "gmsh:dim_tags")
+      continue;
     py::array a = np.attr("asarray")(item.second);
     const char k = a.dtype().kind();
-    if (k == 'f' || k == 'i' || k == 'u' || k == 'b') point_data[item.first] = a;
+    if (k == 'f' || k == 'i' || k == 'u' || k == 'b')
+      point_data[item.first] = a;
   }
   // meshio keeps 2D points as given, (n, 2) or (n, 3) (what it reads).
   return mesh_from_arrays(m.attr("points"), cells, point_data, cell_data, origin);
@@ -559,9 +604,11 @@ py::dict check(PyMesh &m, bool full) {
     py::gil_scoped_release release;
     const bisect::Invariants &before = original(m);
     r = full ? bisect::check_conformity(m.mesh, &before) : bisect::check_refined(m.mesh, before);
-    if (r.ok) now = bisect::measure_invariants(m.mesh, full);
+    if (r.ok)
+      now = bisect::measure_invariants(m.mesh, full);
   }
-  if (!r.ok) throw bisect::Error(ErrorKind::Check, {}, "check failed: " + r.failure);
+  if (!r.ok)
+    throw bisect::Error(ErrorKind::Check, {}, "check failed: " + r.failure);
   py::dict out;
   out["conforming"] = true;
   out["cells"] = m.mesh.num_cells();
@@ -569,7 +616,8 @@ py::dict check(PyMesh &m, bool full) {
   out["volume"] = now.volume;
   out["boundary_measure"] = now.boundary_measure;
   out["boundary_facets"] = now.boundary_facets;
-  if (full) out["euler"] = now.euler;
+  if (full)
+    out["euler"] = now.euler;
   out["original_volume"] = m.original->volume;
   out["original_boundary_measure"] = m.original->boundary_measure;
   return out;
@@ -592,10 +640,15 @@ py::dict quality(PyMesh &m) {
 void mesh_write(PyMesh &m, const py::object &path_in, const std::string &compression) {
   BusyGuard guard(m);
   bisect::WriteOptions options;
-  if (compression == "zlib") options.compression = bisect::Compression::Zlib;
-  else if (compression == "lz4") options.compression = bisect::Compression::Lz4;
-  else if (compression == "none") options.compression = bisect::Compression::None;
-  else throw bisect::UsageError("unknown compression '" + compression + "' (expected zlib, lz4 or none)");
+  if (compression == "zlib")
+    options.compression = bisect::Compression::Zlib;
+  else if (compression == "lz4")
+    options.compression = bisect::Compression::Lz4;
+  else if (compression == "none")
+    options.compression = bisect::Compression::None;
+  else
+    throw bisect::UsageError("unknown compression '" + compression +
+                             "' (expected zlib, lz4 or none)");
   const std::string path = py::cast<std::string>(py::module_::import("os").attr("fspath")(path_in));
   bisect::check_output_format(path, m.mesh.dim);
   // save_mesh reorders the cells while it writes and restores them: views
@@ -613,7 +666,8 @@ py::dict data_views(py::object self, bool cells) {
   py::dict out;
   for (DataArray &a : arrays) {
     std::vector<py::ssize_t> shape{py::ssize_t(count)};
-    if (a.components != 1) shape.push_back(a.components);
+    if (a.components != 1)
+      shape.push_back(a.components);
     out[py::str(a.name)] = make_view(self, slots[a.name], a.values.data(), shape, true);
   }
   return out;
@@ -632,11 +686,13 @@ PYBIND11_MODULE(pybisect, m) {
       "prints; e.kind is 'input', 'usage', 'check', 'limit' or 'resource'; e.file names the file "
       "it concerns (None when none).",
       runtime_error.ptr(), nullptr);
-  if (!g_error_type) throw py::error_already_set();
+  if (!g_error_type)
+    throw py::error_already_set();
   m.add_object("Error", py::handle(g_error_type)); // add_object keeps its own reference
   py::register_exception_translator([](std::exception_ptr p) {
     try {
-      if (p) std::rethrow_exception(p);
+      if (p)
+        std::rethrow_exception(p);
     } catch (const bisect::Error &e) {
       raise_error(e);
     }
@@ -649,8 +705,8 @@ PYBIND11_MODULE(pybisect, m) {
                      "mesh's memory (no copy). points and cells are read-only. refine() does not "
                      "change an existing view: it keeps showing the mesh as it was before; read "
                      "the property again after refine.")
-      .def(py::init([](const py::object &points, const py::object &cells, const py::object &point_data,
-                       const py::object &cell_data) {
+      .def(py::init([](const py::object &points, const py::object &cells,
+                       const py::object &point_data, const py::object &cell_data) {
              return mesh_from_arrays(points, cells, point_data, cell_data, "<arrays>");
            }),
            py::arg("points"), py::arg("cells"), py::arg("point_data") = py::none(),
@@ -663,12 +719,14 @@ PYBIND11_MODULE(pybisect, m) {
       .def_property_readonly("dim", [](const PyMesh &p) { return p.mesh.dim; })
       .def_property_readonly("num_cells", [](const PyMesh &p) { return p.mesh.num_cells(); })
       .def_property_readonly("num_vertices", [](const PyMesh &p) { return p.mesh.num_vertices(); })
-      .def_property_readonly("marked", [](const PyMesh &p) { return p.mesh.marked(); },
-                             "Whether the cells carry a bisection state (after refine, or read "
-                             "from a file bisect wrote)")
+      .def_property_readonly(
+          "marked", [](const PyMesh &p) { return p.mesh.marked(); },
+          "Whether the cells carry a bisection state (after refine, or read "
+          "from a file bisect wrote)")
       .def_property_readonly("marking",
                              [](const PyMesh &p) -> py::object {
-                               if (!p.mesh.marked()) return py::none();
+                               if (!p.mesh.marked())
+                                 return py::none();
                                return py::str(bisect::marking_name(p.mesh.marking));
                              })
       .def_property_readonly(
@@ -690,10 +748,12 @@ PYBIND11_MODULE(pybisect, m) {
           },
           "(m, dim+1) uint32, read-only view of the vertex ids in bisection-tuple order "
           "(to_meshio and write orient them positively)")
-      .def_property_readonly("point_data", [](py::object self) { return data_views(self, false); },
-                             "dict name -> writable float64 view (n,) or (n, k)")
-      .def_property_readonly("cell_data", [](py::object self) { return data_views(self, true); },
-                             "dict name -> writable float64 view (m,) or (m, k)")
+      .def_property_readonly(
+          "point_data", [](py::object self) { return data_views(self, false); },
+          "dict name -> writable float64 view (n,) or (n, k)")
+      .def_property_readonly(
+          "cell_data", [](py::object self) { return data_views(self, true); },
+          "dict name -> writable float64 view (m,) or (m, k)")
       .def("coarsen", &coarsen, py::arg("marked") = py::none(), py::arg("passes") = 1,
            py::arg("sum") = std::vector<std::string>{},
            "Undo bisections along the bisection tree: a pass removes every created vertex whose "
@@ -749,7 +809,8 @@ PYBIND11_MODULE(pybisect, m) {
   m.def(
       "read",
       [](const py::object &path_in) {
-        const std::string path = py::cast<std::string>(py::module_::import("os").attr("fspath")(path_in));
+        const std::string path =
+            py::cast<std::string>(py::module_::import("os").attr("fspath")(path_in));
         auto out = std::make_unique<PyMesh>();
         {
           py::gil_scoped_release release;

@@ -27,7 +27,9 @@ void add_common_flags(CLI::App *cmd, CommonFlags &flags) {
   cmd->add_flag("--json", flags.json, "Print a JSON summary on stdout");
 }
 
-void print_json(const nlohmann::json &j) { std::cout << j.dump() << std::endl; }
+void print_json(const nlohmann::json &j) {
+  std::cout << j.dump() << std::endl;
+}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -37,7 +39,8 @@ std::string with_commas(std::size_t n) {
   const std::string digits = std::to_string(n);
   std::string s;
   for (std::size_t i = 0; i < digits.size(); ++i) {
-    if (i > 0 && (digits.size() - i) % 3 == 0) s += ',';
+    if (i > 0 && (digits.size() - i) % 3 == 0)
+      s += ',';
     s += digits[i];
   }
   return s;
@@ -67,11 +70,13 @@ Mesh load_for_refinement(const std::string &path, std::optional<Marking> request
 // Writes `text` into `file` (an OutputSet's file for output `name`).
 void write_text_file(const std::string &file, const std::string &name, const std::string &text) {
   const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  if (fd < 0) throw InputError(name, "cannot write: " + write_failure(errno));
+  if (fd < 0)
+    throw InputError(name, "cannot write: " + write_failure(errno));
   std::size_t done = 0;
   while (done < text.size()) {
     const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && errno == EINTR)
+      continue;
     if (n <= 0) {
       const int err = n < 0 ? errno : EIO;
       ::close(fd);
@@ -79,17 +84,20 @@ void write_text_file(const std::string &file, const std::string &name, const std
     }
     done += std::size_t(n);
   }
-  if (::close(fd) != 0) throw InputError(name, "cannot write: " + write_failure(errno));
+  if (::close(fd) != 0)
+    throw InputError(name, "cannot write: " + write_failure(errno));
 }
 
 // One output file, checked before any work (see output.hpp for the rules).
 void check_extension(const std::string &out) {
   const std::string ext = [&] {
     std::string e = fs::path(out).extension().string();
-    for (char &c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+    for (char &c : e)
+      c = char(std::tolower(static_cast<unsigned char>(c)));
     return e;
   }();
-  if (ext != ".vtu" && ext != ".msh") throw UsageError(out + ": output must end in .vtu or .msh");
+  if (ext != ".vtu" && ext != ".msh")
+    throw UsageError(out + ": output must end in .vtu or .msh");
 }
 
 // Writes `mesh` with its bisection state into output `h` of `outputs`.
@@ -136,26 +144,33 @@ std::vector<double> parse_slices(const std::string &text) {
       used = 0;
     }
     if (used != t.size() || t.empty() || !std::isfinite(v))
-      throw UsageError("--slices: \"" + t + "\" is not a number (expected T0,T1,... or START:STOP:COUNT)");
+      throw UsageError("--slices: \"" + t +
+                       "\" is not a number (expected T0,T1,... or START:STOP:COUNT)");
     return v;
   };
   std::vector<double> out;
   if (text.find(':') != std::string::npos) {
     std::vector<std::string> parts;
     std::stringstream in(text);
-    for (std::string p; std::getline(in, p, ':');) parts.push_back(p);
-    if (parts.size() != 3) throw UsageError("--slices: expected START:STOP:COUNT, got \"" + text + "\"");
+    for (std::string p; std::getline(in, p, ':');)
+      parts.push_back(p);
+    if (parts.size() != 3)
+      throw UsageError("--slices: expected START:STOP:COUNT, got \"" + text + "\"");
     double a = number(parts[0]), b = number(parts[1]), n = number(parts[2]);
     if (!(n >= 1 && n <= 10000 && n == std::floor(n)))
       throw UsageError("--slices: COUNT must be a whole number from 1 to 10000");
-    for (int i = 0; i <= int(n); ++i) out.push_back(a + (b - a) * i / n);
+    for (int i = 0; i <= int(n); ++i)
+      out.push_back(a + (b - a) * i / n);
   } else {
     std::stringstream in(text);
-    for (std::string p; std::getline(in, p, ',');) out.push_back(number(p));
+    for (std::string p; std::getline(in, p, ',');)
+      out.push_back(number(p));
   }
-  if (out.size() < 2) throw UsageError("--slices: need at least two slices");
+  if (out.size() < 2)
+    throw UsageError("--slices: need at least two slices");
   for (std::size_t i = 1; i < out.size(); ++i)
-    if (!(out[i] > out[i - 1])) throw UsageError("--slices: values must increase");
+    if (!(out[i] > out[i - 1]))
+      throw UsageError("--slices: values must increase");
   return out;
 }
 
@@ -166,11 +181,14 @@ int write_generated(Mesh mesh, const std::string &out, bool force, const CommonF
   OutputSet outputs(std::move(inputs), force);
   const int h = outputs.add(out);
   check_output_format(out, mesh.dim);
-  if (mesh.marked()) encode_state(mesh);
+  if (mesh.marked())
+    encode_state(mesh);
   write_mesh_file(outputs.file(h), out, mesh);
   outputs.commit();
   if (flags.json)
-    print_json({{"output", out}, {"dim", mesh.dim}, {"cells", mesh.num_cells()},
+    print_json({{"output", out},
+                {"dim", mesh.dim},
+                {"cells", mesh.num_cells()},
                 {"vertices", mesh.num_vertices()}});
   if (!flags.quiet)
     std::cerr << "bisect: wrote " << out << " (" << mesh.num_cells() << " cells, "

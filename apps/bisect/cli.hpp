@@ -17,8 +17,8 @@
 
 namespace bisect::cli {
 
-inline constexpr int kExitOk = 0, kExitInput = 1, kExitCheck = 2, kExitLimit = 3,
-                     kExitMemory = 4, kExitInterrupted = 130;
+inline constexpr int kExitOk = 0, kExitInput = 1, kExitCheck = 2, kExitLimit = 3, kExitMemory = 4,
+                     kExitInterrupted = 130;
 
 extern const char *const kExitCodesHelp;
 

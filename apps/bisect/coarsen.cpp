@@ -32,11 +32,13 @@ std::vector<char> marked_cells(const Mesh &mesh, const CoarsenArgs &a) {
     std::fill(marks.begin(), marks.end(), 1);
   } else if (!a.region.empty()) {
     auto region = read_region(a.region, mesh.dim);
-    for (CellId c : select_cells(mesh, *region)) marks[c] = 1;
+    for (CellId c : select_cells(mesh, *region))
+      marks[c] = 1;
   } else {
     // A cell array, or a point array (a cell takes its vertices' max).
     const std::vector<double> values = cell_indicator(mesh, a.indicator, a.input);
-    for (CellId c : mark_by_indicator(values, IndicatorRule::Below, a.below, a.input)) marks[c] = 1;
+    for (CellId c : mark_by_indicator(values, IndicatorRule::Below, a.below, a.input))
+      marks[c] = 1;
   }
   return marks;
 }
@@ -76,8 +78,9 @@ int run_coarsen(const CoarsenArgs &a) {
     if (!quiet) {
       char buf[256];
       std::snprintf(buf, sizeof buf, "pass %d%s: %s cells, %s vertices removed, %.2f s\n", p.pass,
-                    a.passes ? ("/" + std::to_string(a.passes)).c_str() : "", with_commas(p.cells).c_str(),
-                    with_commas(p.removed_vertices).c_str(), seconds_since(t_pass));
+                    a.passes ? ("/" + std::to_string(a.passes)).c_str() : "",
+                    with_commas(p.cells).c_str(), with_commas(p.removed_vertices).c_str(),
+                    seconds_since(t_pass));
       std::cerr << buf;
     }
     t_pass = std::chrono::steady_clock::now();
@@ -131,13 +134,14 @@ Command add_coarsen(CLI::App &app) {
               "their sum). Before writing, a check: no degenerate or folded cell, the input's "
               "volume and boundary measure (exit 2 otherwise).\n" +
               std::string(kExitCodesHelp));
-  cmd->add_option("input", a->input, "Input mesh (.vtu or .msh) with its bisection tree")->required();
+  cmd->add_option("input", a->input, "Input mesh (.vtu or .msh) with its bisection tree")
+      ->required();
   auto *ind = cmd->add_option("--indicator", a->indicator,
                               "Cell array (or point array: a cell takes its vertices' max) whose "
                               "value marks a cell when below --below");
   cmd->add_option("--below", a->below, "Threshold for --indicator");
-  auto *reg = cmd->add_option("--region,-r", a->region,
-                              "Region spec (JSON): cells touching it are marked");
+  auto *reg =
+      cmd->add_option("--region,-r", a->region, "Region spec (JSON): cells touching it are marked");
   auto *all = cmd->add_flag("--all", a->all, "Mark every cell");
   ind->excludes(reg)->excludes(all);
   reg->excludes(all);
@@ -146,8 +150,9 @@ Command add_coarsen(CLI::App &app) {
                   "undoes one level of the bisection tree, which can take more passes than "
                   "refinement took iterations")
       ->check(CLI::Range(0, 100000));
-  cmd->add_option("--sum", a->sums, "Cell array whose parent value is the children's sum "
-                                    "(repeatable)");
+  cmd->add_option("--sum", a->sums,
+                  "Cell array whose parent value is the children's sum "
+                  "(repeatable)");
   cmd->add_option("--output,-o", a->output,
                   "Output mesh (.vtu or .msh); default <input stem>.coarsened.vtu here");
   cmd->add_flag("--force,-f", a->force, "Overwrite existing output files (never the input)");

@@ -43,21 +43,22 @@ int run_info(const InfoArgs &a) {
       arrays.push_back({{"name", d.name}, {"on", "cells"}, {"components", d.components}});
     for (const DataArray &d : mesh.point_data)
       arrays.push_back({{"name", d.name}, {"on", "points"}, {"components", d.components}});
-    print_json({{"file", path},
-                {"dim", mesh.dim},
-                {"cells", mesh.num_cells()},
-                {"vertices", mesh.num_vertices()},
-                {"bounding_box", {{"min", box.lo}, {"max", box.hi}}},
-                {"volume", inv.volume},
-                {"boundary_facets", inv.boundary_facets},
-                {"boundary_measure", inv.boundary_measure},
-                {"euler_characteristic", inv.euler},
-                {"min_quality", q.min},
-                {"max_quality", q.max},
-                {"mean_quality", q.mean},
-                {"bisection_state", has_state},
-                {"marking", has_state ? nlohmann::json(marking_name(mesh.marking)) : nlohmann::json()},
-                {"arrays", arrays}});
+    print_json(
+        {{"file", path},
+         {"dim", mesh.dim},
+         {"cells", mesh.num_cells()},
+         {"vertices", mesh.num_vertices()},
+         {"bounding_box", {{"min", box.lo}, {"max", box.hi}}},
+         {"volume", inv.volume},
+         {"boundary_facets", inv.boundary_facets},
+         {"boundary_measure", inv.boundary_measure},
+         {"euler_characteristic", inv.euler},
+         {"min_quality", q.min},
+         {"max_quality", q.max},
+         {"mean_quality", q.mean},
+         {"bisection_state", has_state},
+         {"marking", has_state ? nlohmann::json(marking_name(mesh.marking)) : nlohmann::json()},
+         {"arrays", arrays}});
     return kExitOk;
   }
   std::cout << "file: " << path << "\n"
@@ -66,7 +67,9 @@ int run_info(const InfoArgs &a) {
             << "vertices: " << mesh.num_vertices() << "\n";
   std::cout << "bounding box:";
   for (int k = 0; k < mesh.dim; ++k)
-    std::cout << " " << "xyzt"[k] << " [" << box.lo[std::size_t(k)] << ", " << box.hi[std::size_t(k)] << "]";
+    std::cout << " "
+              << "xyzt"[k] << " [" << box.lo[std::size_t(k)] << ", " << box.hi[std::size_t(k)]
+              << "]";
   std::cout << "\n";
   std::cout << std::setprecision(10) << "volume: " << inv.volume << "\n"
             << "boundary facets: " << inv.boundary_facets << "\n"
@@ -113,7 +116,8 @@ int run_check(const CheckArgs &a) {
                 {"conforming", r.ok},
                 {"failure", r.ok ? nlohmann::json() : nlohmann::json(r.failure)}});
   if (!r.ok) {
-    if (!a.flags.quiet) std::cerr << "bisect: " << path << ": check failed: " << r.failure << "\n";
+    if (!a.flags.quiet)
+      std::cerr << "bisect: " << path << ": check failed: " << r.failure << "\n";
     return kExitCheck;
   }
   if (!a.flags.json && !a.flags.quiet)
@@ -148,9 +152,10 @@ int run_quality(const QualityArgs &a) {
   }
   const double mean = mesh.num_cells() ? sum / double(mesh.num_cells()) : 0.0;
   if (a.flags.json) {
-    nlohmann::json j{{"file", a.input}, {"cells", mesh.num_cells()}, {"min_quality", qmin},
-                     {"max_quality", qmax}, {"mean_quality", mean}, {"histogram", hist}};
-    if (a.classes) j["classes"] = count_similarity_classes(mesh);
+    nlohmann::json j{{"file", a.input},     {"cells", mesh.num_cells()}, {"min_quality", qmin},
+                     {"max_quality", qmax}, {"mean_quality", mean},      {"histogram", hist}};
+    if (a.classes)
+      j["classes"] = count_similarity_classes(mesh);
     print_json(j);
     return kExitOk;
   }
@@ -163,7 +168,8 @@ int run_quality(const QualityArgs &a) {
                   b + 1 == bins ? ']' : ')', hist[std::size_t(b)]);
     std::cout << buf;
   }
-  if (a.classes) std::cout << "classes: " << count_similarity_classes(mesh) << "\n";
+  if (a.classes)
+    std::cout << "classes: " << count_similarity_classes(mesh) << "\n";
   return kExitOk;
 }
 
@@ -181,8 +187,9 @@ Command add_info(CLI::App &app) {
 Command add_check(CLI::App &app) {
   auto a = std::make_shared<CheckArgs>();
   auto *cmd = app.add_subcommand(
-      "check", "Check conformity: facets shared by at most two cells, no degenerate or inverted "
-               "cell; with --against, volume, boundary measure and Euler characteristic unchanged.");
+      "check",
+      "Check conformity: facets shared by at most two cells, no degenerate or inverted "
+      "cell; with --against, volume, boundary measure and Euler characteristic unchanged.");
   cmd->footer("Example: bisect check ball-10.vtu --against data/ball.msh   (exit 2 names the "
               "first failure)");
   cmd->add_option("input", a->input, "Mesh file")->required();

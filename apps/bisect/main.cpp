@@ -35,7 +35,8 @@ void install_signal_handlers() {
   struct sigaction sa {};
   sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
-  for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP})
+    ::sigaction(sig, &sa, nullptr);
   // A file size limit or a reader that went away makes write() fail with
   // EFBIG or EPIPE, reported as such, instead of killing the process.
   std::signal(SIGXFSZ, SIG_IGN);
@@ -47,13 +48,16 @@ void install_signal_handlers() {
 std::string one_line(const std::string &text) {
   std::string out;
   for (unsigned char c : text) {
-    if (c == '\n') out += "\\n";
-    else if (c == '\r') out += "\\r";
+    if (c == '\n')
+      out += "\\n";
+    else if (c == '\r')
+      out += "\\r";
     else if (c < 0x20 || c == 0x7f) {
       char buf[8];
       std::snprintf(buf, sizeof buf, "\\x%02X", c);
       out += buf;
-    } else out += char(c);
+    } else
+      out += char(c);
   }
   return out;
 }
@@ -70,10 +74,11 @@ int main(int argc, char **argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "bisect 0.1");
 
-  std::vector<Command> commands{add_refine(app), add_info(app),  add_check(app),
+  std::vector<Command> commands{add_refine(app),  add_info(app),   add_check(app),
                                 add_quality(app), add_colour(app), add_extrude(app),
-                                add_slice(app), add_coarsen(app)};
-  for (Command &c : add_generate(app)) commands.push_back(std::move(c));
+                                add_slice(app),   add_coarsen(app)};
+  for (Command &c : add_generate(app))
+    commands.push_back(std::move(c));
 
   try {
     app.parse(argc, argv);
@@ -101,7 +106,8 @@ int main(int argc, char **argv) {
 
   try {
     for (const Command &c : commands)
-      if (*c.app) return c.run();
+      if (*c.app)
+        return c.run();
   } catch (const Error &e) {
     switch (e.kind) {
     case ErrorKind::Check:

@@ -3,11 +3,11 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <iterator>
 #include <cstdlib>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <iterator>
 #include <memory>
 #include <sstream>
 
@@ -64,24 +64,30 @@ int run_refine(const RefineArgs &a) {
     throw UsageError("--iterations with --indicator: the indicator belongs to the input's cells, "
                      "so it marks one iteration; run refine again with a new indicator");
   std::optional<Marking> marking;
-  if (!a.marking.empty()) marking = parse_marking(a.marking);
+  if (!a.marking.empty())
+    marking = parse_marking(a.marking);
   std::string out = a.output.empty() ? default_output(a.input) : a.output;
   // -o -: the mesh goes to standard output (then no CSV unless asked for).
   if (out == "-") {
-    if (a.format.empty()) throw UsageError("-o -: give the format with --format vtu or --format msh");
-    if (a.flags.json) throw UsageError("--json and -o - both write to standard output; choose one");
+    if (a.format.empty())
+      throw UsageError("-o -: give the format with --format vtu or --format msh");
+    if (a.flags.json)
+      throw UsageError("--json and -o - both write to standard output; choose one");
     out = "/dev/stdout";
   }
   const std::string csv = !a.csv.empty() ? a.csv : a.output == "-" ? "none" : default_csv(out);
-  if (a.format.empty()) check_extension(out);
+  if (a.format.empty())
+    check_extension(out);
   // Every output is checked before any work and written as one transaction.
   std::vector<std::string> inputs{a.input};
-  if (!a.region.empty()) inputs.push_back(a.region);
+  if (!a.region.empty())
+    inputs.push_back(a.region);
   OutputSet outputs(inputs, a.force);
   const int h_mesh = outputs.add(out);
   const int h_csv = csv == "none" ? -1 : outputs.add(csv);
   std::vector<int> h_slices;
-  for (double t : a.slices) h_slices.push_back(outputs.add(slice_path(out, "t", t)));
+  for (double t : a.slices)
+    h_slices.push_back(outputs.add(slice_path(out, "t", t)));
 
   StageSeconds stages;
   auto t0 = std::chrono::steady_clock::now();
@@ -106,11 +112,13 @@ int run_refine(const RefineArgs &a) {
     // inherit cell arrays); a previous run's is replaced.
     std::erase_if(mesh.cell_data, [](const DataArray &d) { return d.name == kOriginArray; });
     DataArray origin{kOriginArray, 1, std::vector<double>(mesh.num_cells()), ValueType::Int32};
-    for (std::size_t c = 0; c < mesh.num_cells(); ++c) origin.values[c] = double(c);
+    for (std::size_t c = 0; c < mesh.num_cells(); ++c)
+      origin.values[c] = double(c);
     mesh.cell_data.push_back(std::move(origin));
   }
   std::unique_ptr<Region> region;
-  if (!a.region.empty()) region = read_region(a.region, mesh.dim);
+  if (!a.region.empty())
+    region = read_region(a.region, mesh.dim);
   // The cells the indicator marks, in the input's numbering (one iteration).
   std::vector<CellId> by_indicator;
   if (!a.indicator.empty()) {
@@ -118,12 +126,17 @@ int run_refine(const RefineArgs &a) {
     const IndicatorRule rule = a.above ? IndicatorRule::Above
                                : a.top ? IndicatorRule::Top
                                        : IndicatorRule::Dorfler;
-    by_indicator = mark_by_indicator(values, rule, a.above ? *a.above : a.top ? *a.top : *a.dorfler,
+    by_indicator = mark_by_indicator(values, rule,
+                                     a.above ? *a.above
+                                     : a.top ? *a.top
+                                             : *a.dorfler,
                                      a.input);
   }
   Selector select = [&](const Mesh &m) {
-    if (a.indicator.empty()) return select_cells(m, *region);
-    if (!region) return by_indicator;
+    if (a.indicator.empty())
+      return select_cells(m, *region);
+    if (!region)
+      return by_indicator;
     std::vector<CellId> both = select_cells(m, *region), out;
     std::set_union(both.begin(), both.end(), by_indicator.begin(), by_indicator.end(),
                    std::back_inserter(out));
@@ -131,7 +144,8 @@ int run_refine(const RefineArgs &a) {
   };
 
   std::ostringstream rows;
-  rows << "iteration,cells,vertices,selected,bisections,min_quality,max_quality,mean_quality,seconds\n";
+  rows << "iteration,cells,vertices,selected,bisections,min_quality,max_quality,mean_quality,"
+          "seconds\n";
   auto row = [&](int it, std::size_t sel, std::size_t bis, const QualitySummary &q, double sec) {
     char buf[256];
     std::snprintf(buf, sizeof buf, "%d,%zu,%zu,%zu,%zu,%.9g,%.9g,%.9g,%.6f\n", it, mesh.num_cells(),
@@ -172,7 +186,8 @@ int run_refine(const RefineArgs &a) {
                     r.quality.max, r.seconds);
       std::cerr << buf;
     }
-    if (g_after_iteration_hook) g_after_iteration_hook(r.iteration, m, r.first_new_vertex);
+    if (g_after_iteration_hook)
+      g_after_iteration_hook(r.iteration, m, r.first_new_vertex);
   };
   DriverResult result;
   try {
@@ -186,15 +201,18 @@ int run_refine(const RefineArgs &a) {
   stages.quality = result.quality_seconds;
   stages.final_check = options.check_every_iteration ? 0.0 : result.check_seconds;
   if (!quiet) {
-    if (!result.stop_message.empty()) std::cerr << "bisect: " << result.stop_message << "\n";
+    if (!result.stop_message.empty())
+      std::cerr << "bisect: " << result.stop_message << "\n";
     if (result.stop == StopReason::NothingSelected)
-      std::cerr << (a.indicator.empty() ? "bisect: the region touches no cell; nothing more to refine\n"
-                                        : "bisect: nothing is marked; the mesh is written unchanged\n");
+      std::cerr << (a.indicator.empty()
+                        ? "bisect: the region touches no cell; nothing more to refine\n"
+                        : "bisect: nothing is marked; the mesh is written unchanged\n");
   }
   const QualitySummary q = result.quality;
 
   const auto t_write = std::chrono::steady_clock::now();
-  if (h_csv >= 0) write_text_file(outputs.file(h_csv), csv, rows.str());
+  if (h_csv >= 0)
+    write_text_file(outputs.file(h_csv), csv, rows.str());
   WriteOptions write_options;
   write_options.format = a.format;
   write_options.compression = a.compression == "lz4"    ? Compression::Lz4
@@ -206,7 +224,8 @@ int run_refine(const RefineArgs &a) {
     slice_lines += write_slice(mesh, mesh.dim - 1, a.slices[i], outputs, h_slices[i]);
   outputs.commit();
   stages.write = seconds_since(t_write);
-  if (!quiet) std::cerr << slice_lines;
+  if (!quiet)
+    std::cerr << slice_lines;
   const double total = seconds_since(t_start);
   if (a.flags.json) {
     nlohmann::json j;
@@ -249,29 +268,33 @@ Command add_refine(CLI::App &app) {
       "refine", "Refine a mesh locally around a region (iteration after iteration) or where a "
                 "solver's error indicator marks it, to conformity.");
   cmd->footer("Example: bisect refine data/ball.msh --region data/regions/hemisphere.json "
-                     "--iterations 10 -o ball-10.vtu\n"
-                     "         bisect refine mesh.vtu --indicator eta --dorfler 0.5 -o next.vtu\n"
-                     "Writes the mesh (.vtu or .msh by extension, with the bisection state as "
-                     "cell arrays bisect:*, so refining the output continues the same sequence) "
-                     "and a CSV with one row per iteration. A file's bisection state is checked on "
-                     "reading (an altered one is an input error).\n"
-                     "Before writing, a final check runs (unless --check checked every iteration): "
-                     "no degenerate or folded cell, every facet in at most two cells, the input's "
-                     "volume and boundary measure; a failure exits 2 and writes nothing. Refinement "
-                     "stops (exit 3, the mesh before that iteration written) before it would bisect "
-                     "an edge whose extent is below 2^-40 of its ends' largest coordinate magnitude "
-                     "or below 2^-100.\n" +
-                     std::string(kExitCodesHelp));
+              "--iterations 10 -o ball-10.vtu\n"
+              "         bisect refine mesh.vtu --indicator eta --dorfler 0.5 -o next.vtu\n"
+              "Writes the mesh (.vtu or .msh by extension, with the bisection state as "
+              "cell arrays bisect:*, so refining the output continues the same sequence) "
+              "and a CSV with one row per iteration. A file's bisection state is checked on "
+              "reading (an altered one is an input error).\n"
+              "Before writing, a final check runs (unless --check checked every iteration): "
+              "no degenerate or folded cell, every facet in at most two cells, the input's "
+              "volume and boundary measure; a failure exits 2 and writes nothing. Refinement "
+              "stops (exit 3, the mesh before that iteration written) before it would bisect "
+              "an edge whose extent is below 2^-40 of its ends' largest coordinate magnitude "
+              "or below 2^-100.\n" +
+              std::string(kExitCodesHelp));
   cmd->add_option("input", a->input, "Input mesh (.vtu or .msh)")->required();
-  cmd->add_option("--region,-r", a->region, "Region spec (JSON): sphere, hemisphere, box, "
-                                             "halfspace, moving_sphere, levelset, union, intersection");
-  cmd->add_option("--indicator", a->indicator,
-                  "Mark cells by this one-component cell array of the input (a point array: a "
-                  "cell's value is the largest of its vertices'), with --above, --top or --dorfler; "
-                  "with --region too, a cell is refined when either marks it");
-  auto *above = cmd->add_option("--above", a->above, "--indicator: the cells whose value is greater than X");
-  auto *top = cmd->add_option("--top", a->top,
-                              "--indicator: the ceil(F * cells) cells with the largest values (0 < F <= 1)");
+  cmd->add_option("--region,-r", a->region,
+                  "Region spec (JSON): sphere, hemisphere, box, "
+                  "halfspace, moving_sphere, levelset, union, intersection");
+  cmd->add_option(
+      "--indicator", a->indicator,
+      "Mark cells by this one-component cell array of the input (a point array: a "
+      "cell's value is the largest of its vertices'), with --above, --top or --dorfler; "
+      "with --region too, a cell is refined when either marks it");
+  auto *above =
+      cmd->add_option("--above", a->above, "--indicator: the cells whose value is greater than X");
+  auto *top = cmd->add_option(
+      "--top", a->top,
+      "--indicator: the ceil(F * cells) cells with the largest values (0 < F <= 1)");
   auto *dorfler = cmd->add_option(
       "--dorfler", a->dorfler,
       "--indicator: Dorfler's bulk criterion: the fewest cells, largest values first, whose sum of "
@@ -285,32 +308,32 @@ Command add_refine(CLI::App &app) {
   cmd->add_option("--iterations,-n", a->iterations, "Refinement iterations (default 1)")
       ->check(CLI::Range(0, 10000));
   cmd->add_option("--output,-o", a->output,
-                         "Output mesh (.vtu or .msh); default <input stem>.refined.vtu here; "
-                         "- for standard output (with --format)");
+                  "Output mesh (.vtu or .msh); default <input stem>.refined.vtu here; "
+                  "- for standard output (with --format)");
   cmd->add_option("--format", a->format,
-                         "Output format when the output's name has no .vtu/.msh extension "
-                         "(e.g. -o /dev/stdout --format vtu)")
+                  "Output format when the output's name has no .vtu/.msh extension "
+                  "(e.g. -o /dev/stdout --format vtu)")
       ->check(CLI::IsMember({"vtu", "msh"}));
   cmd->add_option("--compression", a->compression,
-                         ".vtu output: zlib (default), lz4 (faster, larger) or none; ParaView and "
-                         "VTK read all three")
+                  ".vtu output: zlib (default), lz4 (faster, larger) or none; ParaView and "
+                  "VTK read all three")
       ->check(CLI::IsMember({"zlib", "lz4", "none"}));
   cmd->add_option("--quality-csv", a->csv,
-                         "Per-iteration quality CSV; default <output stem>.quality.csv; none: no CSV");
+                  "Per-iteration quality CSV; default <output stem>.quality.csv; none: no CSV");
   cmd->add_option("--marking,-m", a->marking,
-                         "Global edge order: index (default; every tet unflagged planar), "
-                         "longest (longest edge first), sorted ((x0<...<xn)_n)")
+                  "Global edge order: index (default; every tet unflagged planar), "
+                  "longest (longest edge first), sorted ((x0<...<xn)_n)")
       ->check(CLI::IsMember({"index", "longest", "sorted"}));
   cmd->add_option("--max-elements", a->max_elements,
-                         "Stop before an iteration would make more cells than this (exit 3)")
+                  "Stop before an iteration would make more cells than this (exit 3)")
       ->check(CLI::Range(std::int64_t(1), std::int64_t(kNoCell) - 1));
   cmd->add_option("--max-memory", a->max_memory_gib,
-                         "Stop (exit 3) before an iteration estimated to need more than this many "
-                         "GiB; default: the memory available now")
+                  "Stop (exit 3) before an iteration estimated to need more than this many "
+                  "GiB; default: the memory available now")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--slices", a->slices,
-                         "Also write the sections t = T1,T2,... of the final mesh (t: the last "
-                         "coordinate; 4D -> 3D tets, 2D+t -> 2D triangles) as <output stem>.t<T>.vtu")
+                  "Also write the sections t = T1,T2,... of the final mesh (t: the last "
+                  "coordinate; 4D -> 3D tets, 2D+t -> 2D triangles) as <output stem>.t<T>.vtu")
       ->delimiter(',');
   add_common_flags(cmd, a->flags);
   cmd->add_flag("--force,-f", a->force, "Overwrite existing output files (never the input)");
@@ -318,10 +341,10 @@ Command add_refine(CLI::App &app) {
                 "Write the cell array bisect:origin: for each output cell the index of the input "
                 "cell it descends from (the parent map for a solver's own transfer)");
   cmd->add_flag("--check", a->check,
-                       "After every iteration, check conformity and that volume, boundary measure "
-                       "and Euler characteristic are those of the input (exit 2 naming the "
-                       "iteration and the failure, no output written); always on in a "
-                       "BISECT_PARANOID build");
+                "After every iteration, check conformity and that volume, boundary measure "
+                "and Euler characteristic are those of the input (exit 2 naming the "
+                "iteration and the failure, no output written); always on in a "
+                "BISECT_PARANOID build");
 
   return {cmd, [a] { return run_refine(*a); }};
 }

@@ -13,7 +13,8 @@ Mesh read_colourable(const std::string &path, const char *command) {
   Mesh mesh = read_mesh(path);
   prepare_input(mesh, path);
   if (mesh.dim != 2 && mesh.dim != 3)
-    throw InputError(path, std::string(command) + " needs a 2D triangle or 3D tetrahedral mesh, this one is " +
+    throw InputError(path, std::string(command) +
+                               " needs a 2D triangle or 3D tetrahedral mesh, this one is " +
                                std::to_string(mesh.dim) + "D");
   return mesh;
 }
@@ -48,17 +49,19 @@ std::vector<std::uint8_t> colouring_of(Mesh &mesh, const std::string &path, bool
   }
   if (given) {
     if (std::string why = check_colouring(mesh, *given); !why.empty())
-      throw InputError(path, std::string("point array ") + kColourArray + " is not a proper " + colours +
-                                 ": " + why);
+      throw InputError(path, std::string("point array ") + kColourArray + " is not a proper " +
+                                 colours + ": " + why);
     how = colours + " given by the point array " + kColourArray;
     return *given;
   }
   Colouring c = colour_mesh(mesh);
-  const bool partial = !recompute && std::any_of(mesh.point_data.begin(), mesh.point_data.end(),
-                                                 [](const DataArray &a) { return a.name == kColourArray; });
-  const std::string note = partial ? std::string(" (the point array ") + kColourArray +
-                                         " leaves vertices made by refinement uncoloured (-1), so it was ignored)"
-                                   : "";
+  const bool partial =
+      !recompute && std::any_of(mesh.point_data.begin(), mesh.point_data.end(),
+                                [](const DataArray &a) { return a.name == kColourArray; });
+  const std::string note =
+      partial ? std::string(" (the point array ") + kColourArray +
+                    " leaves vertices made by refinement uncoloured (-1), so it was ignored)"
+              : "";
   if (!c.ok)
     throw InputError(path, "no proper " + colours + ": " + c.why + note +
                                "; --barycentric subdivides the mesh into one that has");
@@ -90,18 +93,23 @@ int run_colour(const ColourArgs &a) {
   std::vector<std::uint8_t> colour = colouring_of(mesh, in, barycentric, recompute, how);
   std::vector<std::size_t> count(std::size_t(mesh.dim + 1), 0);
   std::vector<char> used(mesh.num_vertices(), 0);
-  for (VertexId v : mesh.cells) used[v] = 1;
+  for (VertexId v : mesh.cells)
+    used[v] = 1;
   for (std::size_t v = 0; v < used.size(); ++v)
-    if (used[v]) count[colour[v]]++;
+    if (used[v])
+      count[colour[v]]++;
   if (a.flags.json) {
-    print_json({{"file", in}, {"colouring", how}, {"cells", mesh.num_cells()},
+    print_json({{"file", in},
+                {"colouring", how},
+                {"cells", mesh.num_cells()},
                 {"vertices_per_colour", count},
                 {"output", out.empty() ? nlohmann::json() : nlohmann::json(out)}});
   } else {
-    std::cout << in << ": " << how << "\n" << "cells: " << mesh.num_cells() << "\n";
+    std::cout << in << ": " << how << "\n"
+              << "cells: " << mesh.num_cells() << "\n";
     for (int k = 0; k <= mesh.dim; ++k)
-      std::cout << "colour " << k << " (" << "ABCD"[k] << "): " << count[std::size_t(k)]
-                << " vertices\n";
+      std::cout << "colour " << k << " ("
+                << "ABCD"[k] << "): " << count[std::size_t(k)] << " vertices\n";
   }
   if (!out.empty()) {
     set_colour_array(mesh, colour);
@@ -115,8 +123,9 @@ int run_colour(const ColourArgs &a) {
 }
 
 // extrude --method colouring: prisms cut and tagged by the colouring (seed 001).
-int run_extrude_colouring(const std::string &in, const std::vector<double> &slices, bool barycentric,
-                          const std::string &out, bool force, const CommonFlags &flags) {
+int run_extrude_colouring(const std::string &in, const std::vector<double> &slices,
+                          bool barycentric, const std::string &out, bool force,
+                          const CommonFlags &flags) {
   check_extension(out);
   OutputSet outputs({in}, force);
   const int h = outputs.add(out);
@@ -133,8 +142,11 @@ int run_extrude_colouring(const std::string &in, const std::vector<double> &slic
   write_output_mesh(outputs, h, st);
   outputs.commit();
   if (flags.json)
-    print_json({{"output", out}, {"dim", st.dim}, {"cells", st.num_cells()},
-                {"vertices", st.num_vertices()}, {"colouring", how}});
+    print_json({{"output", out},
+                {"dim", st.dim},
+                {"cells", st.num_cells()},
+                {"vertices", st.num_vertices()},
+                {"colouring", how}});
   if (!flags.quiet)
     std::cerr << "bisect: wrote " << out << " (" << st.num_cells()
               << (st.dim == 4 ? " pentatopes, " : " tetrahedra, ") << st.num_vertices()
@@ -150,10 +162,12 @@ struct ExtrudeArgs {
 
 int run_extrude(const ExtrudeArgs &a) {
   const std::vector<double> ts = parse_slices(a.slices);
-  if (a.method == "colouring" && a.hull) throw UsageError("--hull needs --method delaunay");
+  if (a.method == "colouring" && a.hull)
+    throw UsageError("--hull needs --method delaunay");
   if (a.method == "colouring")
     return run_extrude_colouring(a.input, ts, a.barycentric, a.output, a.force, a.flags);
-  if (a.barycentric) throw UsageError("--barycentric needs --method colouring");
+  if (a.barycentric)
+    throw UsageError("--barycentric needs --method colouring");
   check_extension(a.output);
   {
     OutputSet probe({a.input}, a.force); // refuse a bad output before the work
@@ -187,13 +201,17 @@ int run_slice(const SliceArgs &a) {
   const int h = outputs.add(a.output);
   Mesh mesh = read_mesh(a.input);
   prepare_input(mesh, a.input);
-  if (mesh.dim < 3) throw InputError(a.input, "slice needs a 3D or 4D mesh, this one is 2D");
+  if (mesh.dim < 3)
+    throw InputError(a.input, "slice needs a 3D or 4D mesh, this one is 2D");
   const int axis = a.axis == "t" ? mesh.dim - 1 : int(std::string("xyz").find(a.axis[0]));
-  if (axis >= mesh.dim) throw UsageError("slice: a 3D mesh has no axis " + a.axis);
+  if (axis >= mesh.dim)
+    throw UsageError("slice: a 3D mesh has no axis " + a.axis);
   const std::string line = write_slice(mesh, axis, a.value, outputs, h);
   outputs.commit();
-  if (a.flags.json) print_json({{"input", a.input}, {"output", a.output}, {"axis", a.axis}, {"value", a.value}});
-  if (!a.flags.quiet) std::cerr << line;
+  if (a.flags.json)
+    print_json({{"input", a.input}, {"output", a.output}, {"axis", a.axis}, {"value", a.value}});
+  if (!a.flags.quiet)
+    std::cerr << line;
   return kExitOk;
 }
 
@@ -225,8 +243,10 @@ int run_simplex(const GenerateArgs &a) {
 
 int run_kuhn(const GenerateArgs &a) {
   double lo = a.lo, hi = a.hi;
-  if (a.box.size() == 2) lo = a.box[0], hi = a.box[1];
-  if (!(lo < hi)) throw UsageError("generate kuhn: --lo must be below --hi");
+  if (a.box.size() == 2)
+    lo = a.box[0], hi = a.box[1];
+  if (!(lo < hi))
+    throw UsageError("generate kuhn: --lo must be below --hi");
   return write_generated(generate_kuhn(a.dim, a.cells, lo, hi), a.output, a.force, a.flags);
 }
 
@@ -244,8 +264,9 @@ Command add_colour(CLI::App &app) {
               "with the reason, e.g. an interior edge in an odd number of tets). Colours 0, "
               "1, 2, 3 are seed 001's labels A, B, C, D.");
   cmd->add_option("input", a->input, "2D or 3D mesh (.vtu or .msh)")->required();
-  cmd->add_flag("--barycentric", a->barycentric,
-                "Subdivide barycentrically (6 triangles / 24 tets per cell), coloured by vertex kind");
+  cmd->add_flag(
+      "--barycentric", a->barycentric,
+      "Subdivide barycentrically (6 triangles / 24 tets per cell), coloured by vertex kind");
   cmd->add_flag("--recompute", a->recompute, "Ignore a 'colour' array in the input");
   cmd->add_option("--output,-o", a->output, "Write the mesh with the point array 'colour'");
   cmd->add_flag("--force,-f", a->force, "Overwrite an existing file");
@@ -256,8 +277,9 @@ Command add_colour(CLI::App &app) {
 Command add_extrude(CLI::App &app) {
   auto a = std::make_shared<ExtrudeArgs>();
   auto *cmd = app.add_subcommand(
-      "extrude", "Extrude a 3D tetrahedral mesh over time slices into a 4D pentatope mesh (or, with "
-                 "--method colouring, a 2D triangle mesh into a 3D tetrahedral one).");
+      "extrude",
+      "Extrude a 3D tetrahedral mesh over time slices into a 4D pentatope mesh (or, with "
+      "--method colouring, a 2D triangle mesh into a 3D tetrahedral one).");
   cmd->footer("Example: bisect extrude cube.vtu --slices 0,0.5,1 -o spacetime.vtu\n"
               "         bisect extrude cube.vtu --slices 0:1:4 -o spacetime.vtu   "
               "(4 slabs between 0 and 1)\n"
@@ -296,7 +318,8 @@ Command add_slice(CLI::App &app) {
   cmd->footer("Example: bisect slice hypercube-25.vtu --t 0.5 -o section.vtu");
   cmd->add_option("input", a->input, "4D mesh (.vtu), or 3D mesh")->required();
   auto *t_opt = cmd->add_option("--t", a->value, "Shorthand for --axis t --value VALUE");
-  cmd->add_option("--axis", a->axis, "x, y, z or t (default t: the last coordinate, z of a 3D mesh)")
+  cmd->add_option("--axis", a->axis,
+                  "x, y, z or t (default t: the last coordinate, z of a 3D mesh)")
       ->check(CLI::IsMember({"x", "y", "z", "t"}));
   cmd->add_option("--value", a->value, "Where the hyperplane cuts the axis")->excludes(t_opt);
   cmd->add_option("--output,-o", a->output, "Output 3D mesh (.vtu or .msh)")->required();
@@ -323,7 +346,8 @@ std::vector<Command> add_generate(CLI::App &app) {
   simplex->add_option("--output,-o", a->output, "Output mesh")->required();
   simplex->add_flag("--force,-f", a->force, "Overwrite an existing file");
   add_common_flags(simplex, a->flags);
-  auto *kuhn = gen_cmd->add_subcommand("kuhn", "Freudenthal-Kuhn cubes: K^dim cubes of dim! simplices.");
+  auto *kuhn =
+      gen_cmd->add_subcommand("kuhn", "Freudenthal-Kuhn cubes: K^dim cubes of dim! simplices.");
   kuhn->footer("Example: bisect generate kuhn --dim 3 --cells 4 -o cube.vtu");
   kuhn->add_option("--dim,-d", a->dim, "2, 3 or 4")->check(CLI::Range(2, 4));
   kuhn->add_option("--cells,-k", a->cells, "Cubes per side")->check(CLI::Range(1, 1000));

@@ -11,20 +11,20 @@
 //   bisect::save_mesh("ball-5.vtu", mesh);                // with its bisection state
 #pragma once
 
-#include "bisect/check.hpp"    // conformity checks, input validation
-#include "bisect/coarsen.hpp"  // coarsening along the bisection tree
-#include "bisect/colour.hpp"   // vertex colourings (tools)
-#include "bisect/driver.hpp"   // the iteration driver, refine by marked cells
-#include "bisect/error.hpp"    // bisect::Error and its kinds
-#include "bisect/extrude.hpp"  // space-time extrusion (tools)
-#include "bisect/generate.hpp" // simplices and Kuhn cubes (tools)
+#include "bisect/check.hpp"     // conformity checks, input validation
+#include "bisect/coarsen.hpp"   // coarsening along the bisection tree
+#include "bisect/colour.hpp"    // vertex colourings (tools)
+#include "bisect/driver.hpp"    // the iteration driver, refine by marked cells
+#include "bisect/error.hpp"     // bisect::Error and its kinds
+#include "bisect/extrude.hpp"   // space-time extrusion (tools)
+#include "bisect/generate.hpp"  // simplices and Kuhn cubes (tools)
 #include "bisect/indicator.hpp" // marking by an error indicator
-#include "bisect/io.hpp"       // .vtu and .msh, load_mesh / save_mesh
-#include "bisect/mark.hpp"     // marking: global edge orders, ensure_marked
-#include "bisect/measure.hpp"  // volumes, quality, similarity classes
-#include "bisect/mesh.hpp"     // the mesh: flat arrays
-#include "bisect/output.hpp"   // outputs written as one transaction
-#include "bisect/refine.hpp"   // bisection and refine to conformity
-#include "bisect/region.hpp"   // region specs and selection
-#include "bisect/slice.hpp"    // sections of 3D and 4D meshes (tools)
-#include "bisect/state.hpp"    // the bisection state in files
+#include "bisect/io.hpp"        // .vtu and .msh, load_mesh / save_mesh
+#include "bisect/mark.hpp"      // marking: global edge orders, ensure_marked
+#include "bisect/measure.hpp"   // volumes, quality, similarity classes
+#include "bisect/mesh.hpp"      // the mesh: flat arrays
+#include "bisect/output.hpp"    // outputs written as one transaction
+#include "bisect/refine.hpp"    // bisection and refine to conformity
+#include "bisect/region.hpp"    // region specs and selection
+#include "bisect/slice.hpp"     // sections of 3D and 4D meshes (tools)
+#include "bisect/state.hpp"     // the bisection state in files

@@ -21,9 +21,9 @@ struct CoarsenOptions {
 };
 
 struct CoarsenPass {
-  int pass = 0;                       // 1, 2, ...
-  std::size_t removed_vertices = 0;   // by this pass
-  std::size_t merged_pairs = 0;       // by this pass (cells removed)
+  int pass = 0;                        // 1, 2, ...
+  std::size_t removed_vertices = 0;    // by this pass
+  std::size_t merged_pairs = 0;        // by this pass (cells removed)
   std::size_t cells = 0, vertices = 0; // after it
 };
 

@@ -46,9 +46,9 @@ std::string check_colouring(const Mesh &mesh, const std::vector<std::uint8_t> &c
 
 // The point array `colour` of the mesh as per-vertex colours, or nullopt when
 // the mesh has no such array or when some vertex has kNoLabel (-1: made by
-// refinement or slicing after the colouring was written). Throws InputError (without a file name) when
-// the array has several components or values that are not whole numbers in
-// 0..dim. Does not check that the colouring is proper.
+// refinement or slicing after the colouring was written). Throws InputError (without a file name)
+// when the array has several components or values that are not whole numbers in 0..dim. Does not
+// check that the colouring is proper.
 std::optional<std::vector<std::uint8_t>> colour_array(const Mesh &mesh);
 
 // Stores `colour` as the point array `colour` (replacing an existing one).

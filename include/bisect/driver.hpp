@@ -21,25 +21,25 @@ using Selector = std::function<std::vector<CellId>(const Mesh &)>;
 
 struct DriverOptions {
   int iterations = 1;
-  int depth = 1;              // bisections of each selected cell per iteration (refine_marked)
-  std::size_t max_cells = 0;  // stop before an iteration would pass it; 0: none
-  double max_memory_gib = 0;  // stop before an iteration estimated to need more
-                              // than this in all; 0: more than is available now
-  bool check_every_iteration = false; // full conformity check against the input's
-                                      // invariants after each iteration (slow)
-  bool final_check = true;    // the cheap final check (check_refined) at the end
+  int depth = 1;             // bisections of each selected cell per iteration (refine_marked)
+  std::size_t max_cells = 0; // stop before an iteration would pass it; 0: none
+  double max_memory_gib = 0; // stop before an iteration estimated to need more
+                             // than this in all; 0: more than is available now
+  bool check_every_iteration = false;        // full conformity check against the input's
+                                             // invariants after each iteration (slow)
+  bool final_check = true;                   // the cheap final check (check_refined) at the end
   const std::atomic<bool> *cancel = nullptr; // set it to stop (the running
                                              // iteration is undone)
 };
 
 // One finished iteration.
 struct IterationReport {
-  int iteration = 0;          // 1, 2, ...
+  int iteration = 0; // 1, 2, ...
   std::size_t cells = 0, vertices = 0;
   std::size_t first_new_vertex = 0; // vertices from here on were made by it
   std::size_t selected = 0, bisections = 0, closure_passes = 0;
   QualitySummary quality;
-  double seconds = 0;         // select + refine + quality
+  double seconds = 0; // select + refine + quality
 };
 
 enum class StopReason {
@@ -52,11 +52,11 @@ enum class StopReason {
 };
 
 struct DriverResult {
-  int iterations = 0;         // iterations completed
+  int iterations = 0; // iterations completed
   StopReason stop = StopReason::Done;
-  std::string stop_message;   // one line for the limits, else empty
+  std::string stop_message; // one line for the limits, else empty
   std::size_t bisections = 0;
-  QualitySummary quality;     // of the final mesh
+  QualitySummary quality; // of the final mesh
   bool limit_reached() const {
     return stop == StopReason::CellLimit || stop == StopReason::MemoryLimit ||
            stop == StopReason::PrecisionLimit;
@@ -69,8 +69,9 @@ struct DriverResult {
 // mesh. `on_iteration` (optional) sees each finished iteration and may read
 // or change the mesh (the checks run after it). Throws CheckError when a check
 // fails: the mesh is then not conforming and must not be written.
-DriverResult run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options = {},
-                            const std::function<void(const IterationReport &, Mesh &)> &on_iteration = {});
+DriverResult
+run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options = {},
+               const std::function<void(const IterationReport &, Mesh &)> &on_iteration = {});
 
 // Marks each cell of `marked` for `depth` bisections (its descendants inside
 // it, `depth` generations down), then refines to conformity: the smallest

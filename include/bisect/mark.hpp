@@ -81,11 +81,13 @@ void force_type(Mesh &mesh, const std::string &type);
 // (the split edges of its pieces, level after level, state_check_levels(dim)
 // levels deep: a tet facet (4D) 4 levels, a Stage 1 step and its Maubach
 // cycle of 3; a triangle facet (3D) 3 levels, while its newest-vertex
-// bisection is fixed by the first) are the same from both sides. Necessary for conformity, and true of every
-// state bisect writes. Empty when consistent, else one line naming the two
-// cells and the facet. 2D needs no check (a facet is an edge, split at its
-// midpoint from either side). Linear in the number of cells.
-constexpr int state_check_levels(int dim) { return dim == 4 ? 4 : 3; }
+// bisection is fixed by the first) are the same from both sides. Necessary for conformity, and true
+// of every state bisect writes. Empty when consistent, else one line naming the two cells and the
+// facet. 2D needs no check (a facet is an edge, split at its midpoint from either side). Linear in
+// the number of cells.
+constexpr int state_check_levels(int dim) {
+  return dim == 4 ? 4 : 3;
+}
 std::string check_state_consistency(const Mesh &mesh);
 
 std::optional<Marking> parse_marking(const std::string &name);

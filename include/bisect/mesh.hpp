@@ -37,7 +37,8 @@ enum class Marking : std::uint8_t { Index, Longest, Sorted, Explicit };
 
 // Key of the edge {a, b} in `Mesh::edge_rank`.
 inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
-  if (a > b) std::swap(a, b);
+  if (a > b)
+    std::swap(a, b);
   return std::uint64_t(a) << 32 | b;
 }
 
@@ -48,9 +49,21 @@ inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
 // type, e.g. Gmsh's $ElementData, or made in memory): cell arrays whose
 // values are all 32-bit integers are written as Int32, the rest as Float64.
 enum class ValueType : std::uint8_t {
-  Unknown, Float32, Float64, Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64
+  Unknown,
+  Float32,
+  Float64,
+  Int8,
+  UInt8,
+  Int16,
+  UInt16,
+  Int32,
+  UInt32,
+  Int64,
+  UInt64
 };
-inline bool is_integer_type(ValueType t) { return t >= ValueType::Int8; }
+inline bool is_integer_type(ValueType t) {
+  return t >= ValueType::Int8;
+}
 inline bool is_unsigned_type(ValueType t) {
   return t == ValueType::UInt8 || t == ValueType::UInt16 || t == ValueType::UInt32 ||
          t == ValueType::UInt64;
@@ -59,11 +72,16 @@ inline bool is_unsigned_type(ValueType t) {
 // value for unsigned ones.
 inline double label_sentinel(ValueType t) {
   switch (t) {
-  case ValueType::UInt8: return 255.0;
-  case ValueType::UInt16: return 65535.0;
-  case ValueType::UInt32: return 4294967295.0;
-  case ValueType::UInt64: return 18446744073709551615.0;
-  default: return -1.0;
+  case ValueType::UInt8:
+    return 255.0;
+  case ValueType::UInt16:
+    return 65535.0;
+  case ValueType::UInt32:
+    return 4294967295.0;
+  case ValueType::UInt64:
+    return 18446744073709551615.0;
+  default:
+    return -1.0;
   }
 }
 
@@ -80,7 +98,9 @@ struct DataArray {
 // an extruded vertex). Averaging labels is meaningless, so a vertex made by
 // bisection or by slicing between two vertices gets kNoLabel instead.
 inline constexpr double kNoLabel = -1;
-inline bool is_label_array(const std::string &name) { return name == "colour" || name == "slice"; }
+inline bool is_label_array(const std::string &name) {
+  return name == "colour" || name == "slice";
+}
 
 struct Mesh {
   int dim = 0;                   // 2, 3 or 4: space dimension == cell dimension

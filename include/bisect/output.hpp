@@ -46,11 +46,11 @@ public:
 
 private:
   struct Output {
-    std::string name;     // as given
-    std::string target;   // after following symbolic links
-    bool direct = false;  // existing non-regular file: written into
-    std::string temp;     // the temporary, once created
-    int slot = -1;        // its place in the signal-safe registry
+    std::string name;    // as given
+    std::string target;  // after following symbolic links
+    bool direct = false; // existing non-regular file: written into
+    std::string temp;    // the temporary, once created
+    int slot = -1;       // its place in the signal-safe registry
   };
   std::vector<std::string> inputs_;
   bool force_;

@@ -19,7 +19,7 @@ namespace bisect {
 // bisection guarantees, and no midpoint coincides with an end. The absolute
 // floor keeps volumes and facet measures (up to the 6th power of a length in
 // 4D) far from underflow.
-inline constexpr double kRelativeResolution = 0x1p-40; // about 9.1e-13
+inline constexpr double kRelativeResolution = 0x1p-40;  // about 9.1e-13
 inline constexpr double kAbsoluteResolution = 0x1p-100; // about 7.9e-31
 
 struct RefineLimits {
@@ -48,7 +48,8 @@ struct RefineResult {
 // by their own refinement edge until none is left. Children inherit cell data;
 // point data is interpolated linearly at midpoints. When the result would pass
 // a limit the mesh is left exactly as it was and `limit_reached` is set.
-RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected, const RefineLimits &limits = {});
+RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected,
+                    const RefineLimits &limits = {});
 
 // Bisects every cell once, then refines to conformity.
 RefineResult refine_uniform(Mesh &mesh);

@@ -28,10 +28,11 @@ int permutation_rank(const int *p, int k);
 bool permutation_of_rank(int rank, int k, int *p);
 
 // Older files (still read): the tuple's permutation, stage and tag apart.
-inline constexpr const char *kOrderArray = "bisect:order";     // dim+1 comps
-inline constexpr const char *kStageArray = "bisect:stage";     // 0 Opposite, 1 Maubach
-inline constexpr const char *kTagArray = "bisect:tag";         // see mesh.hpp
-inline constexpr const char *kMarkingArray = "bisect:marking"; // 0 index, 1 longest, 2 sorted, 3 explicit
+inline constexpr const char *kOrderArray = "bisect:order"; // dim+1 comps
+inline constexpr const char *kStageArray = "bisect:stage"; // 0 Opposite, 1 Maubach
+inline constexpr const char *kTagArray = "bisect:tag";     // see mesh.hpp
+inline constexpr const char *kMarkingArray =
+    "bisect:marking"; // 0 index, 1 longest, 2 sorted, 3 explicit
 // Explicit marking only: per cell, the rank of each of its dim(dim+1)/2 edges
 // (i, j), i < j, of the stored connectivity, in the order (0,1), (0,2), ...,
 // (n-1,n); -1 for an edge without rank.

@@ -35,7 +35,7 @@
 namespace bisect {
 
 template <int Dim> inline constexpr int kCellVertices = Dim + 1;
-template <int Dim> inline constexpr int kCellEdges = Dim * (Dim + 1) / 2;
+template <int Dim> inline constexpr int kCellEdges = Dim *(Dim + 1) / 2;
 
 struct LocalEdge {
   int first, second; // local vertex indices, first < second
@@ -52,7 +52,9 @@ template <int Dim> constexpr std::array<LocalEdge, kCellEdges<Dim>> make_local_e
 template <int Dim> inline constexpr auto kLocalEdges = make_local_edges<Dim>();
 
 // The tag a Maubach child gets from a parent with tag d.
-constexpr int maubach_child_tag(int d, int dim) { return d > 1 ? d - 1 : dim; }
+constexpr int maubach_child_tag(int d, int dim) {
+  return d > 1 ? d - 1 : dim;
+}
 
 // Writes the two Maubach children of `x` (tag d) into c1 and c2.
 template <int Dim>

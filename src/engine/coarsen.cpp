@@ -72,7 +72,8 @@ private:
   // Index in a child's tuple of the vertex its bisection made; -1 when the
   // state is that of no child.
   static int new_vertex_index(Stage s, int t) {
-    if (s == Stage::Opposite) return t >= 1 ? 0 : -1;
+    if (s == Stage::Opposite)
+      return t >= 1 ? 0 : -1;
     return t < Dim ? t + 1 : 1;
   }
 
@@ -85,7 +86,8 @@ private:
   bool bisect_as(const VertexId *x, Stage s, int t, VertexId z, VertexId a, VertexId b,
                  VertexId *c1, VertexId *c2, Stage &cs, int &ct) const {
     if (s == Stage::Maubach) {
-      if (!is_edge(x[0], x[t], a, b)) return false;
+      if (!is_edge(x[0], x[t], a, b))
+        return false;
       maubach_children<Dim>(x, t, z, c1, c2);
       cs = Stage::Maubach;
       ct = maubach_child_tag(t, Dim);
@@ -93,7 +95,8 @@ private:
     }
     if constexpr (Dim >= 3) {
       const EdgePick e = opposite_edge(order_, x, Dim, t);
-      if (!is_edge(x[e.first], x[e.second], a, b)) return false;
+      if (!is_edge(x[e.first], x[e.second], a, b))
+        return false;
       opposite_children(order_, x, Dim, t, e, z, c1, c2, cs, ct);
       return true;
     }
@@ -106,12 +109,15 @@ private:
   // (its consistent edge does not depend on the order, and the children differ
   // only by reflections).
   static bool same_cell(const VertexId *p, const VertexId *q, Stage s, int t, bool exact) {
-    if (std::equal(p, p + N, q)) return true;
-    if (exact) return false;
+    if (std::equal(p, p + N, q))
+      return true;
+    if (exact)
+      return false;
     if (s == Stage::Maubach)
       return std::equal(p, p + t + 1, std::reverse_iterator<const VertexId *>(q + t + 1)) &&
              std::equal(p + t + 1, p + N, q + t + 1);
-    if (!std::equal(p, p + t, q)) return false;
+    if (!std::equal(p, p + t, q))
+      return false;
     VertexId a[N], b[N];
     std::copy(p + t, p + N, a);
     std::copy(q + t, q + N, b);
@@ -126,10 +132,13 @@ private:
                            std::size_t self, const VertexId *c, Stage s, int t, std::uint16_t g,
                            bool exact) const {
     for (std::size_t j = 0; j < k; ++j) {
-      if (j == self || paired[j]) continue;
+      if (j == self || paired[j])
+        continue;
       const CellId o = star[j];
-      if (m_.stage[o] != s || m_.tag[o] != t || m_.generation[o] != g) continue;
-      if (same_cell(c, m_.cell(o), s, t, exact)) return j;
+      if (m_.stage[o] != s || m_.tag[o] != t || m_.generation[o] != g)
+        continue;
+      if (same_cell(c, m_.cell(o), s, t, exact))
+        return j;
     }
     return std::size_t(-1);
   }
@@ -142,16 +151,23 @@ private:
     VertexId c1[N], c2[N];
     Stage cs;
     int ct;
-    if (!bisect_as(x, s, t, z, a, b, c1, c2, cs, ct)) return false;
+    if (!bisect_as(x, s, t, z, a, b, c1, c2, cs, ct))
+      return false;
     const CellId y = star[i];
-    if (m_.stage[y] != cs || m_.tag[y] != ct) return false;
+    if (m_.stage[y] != cs || m_.tag[y] != ct)
+      return false;
     const VertexId *yx = m_.cell(y);
     const VertexId *sibling;
-    if (same_cell(c1, yx, cs, ct, exact_)) sibling = c2;
-    else if (same_cell(c2, yx, cs, ct, exact_)) sibling = c1;
-    else return false;
-    const std::size_t j = find_in_star(star, k, paired, i, sibling, cs, ct, m_.generation[y], exact_);
-    if (j == std::size_t(-1)) return false;
+    if (same_cell(c1, yx, cs, ct, exact_))
+      sibling = c2;
+    else if (same_cell(c2, yx, cs, ct, exact_))
+      sibling = c1;
+    else
+      return false;
+    const std::size_t j =
+        find_in_star(star, k, paired, i, sibling, cs, ct, m_.generation[y], exact_);
+    if (j == std::size_t(-1))
+      return false;
     paired[i] = paired[j] = 1;
     Merge mg{std::min(y, star[j]), std::max(y, star[j]), {}, s, std::uint8_t(t)};
     std::copy(x, x + N, mg.x);
@@ -162,7 +178,8 @@ private:
   bool pair_maubach(VertexId z, VertexId a, VertexId b, const CellId *star, std::size_t k,
                     std::size_t i, std::vector<char> &paired, std::vector<Merge> &out) const {
     const CellId y = star[i];
-    if (m_.stage[y] != Stage::Maubach) return false;
+    if (m_.stage[y] != Stage::Maubach)
+      return false;
     const VertexId *yx = m_.cell(y);
     const int d = new_vertex_index(Stage::Maubach, m_.tag[y]);
     auto other = [&](VertexId v) { return v == a ? b : v == b ? a : kNoVertex; };
@@ -170,13 +187,15 @@ private:
     if (const VertexId e = other(yx[0]); e != kNoVertex) {
       std::copy(yx, yx + N, x);
       x[d] = e;
-      if (try_parent(x, Stage::Maubach, d, z, a, b, star, k, i, paired, out)) return true;
+      if (try_parent(x, Stage::Maubach, d, z, a, b, star, k, i, paired, out))
+        return true;
     }
     if (const VertexId e = other(yx[d - 1]); e != kNoVertex) {
       x[0] = e;
       std::copy(yx, yx + d, x + 1);
       std::copy(yx + d + 1, yx + N, x + d + 1);
-      if (try_parent(x, Stage::Maubach, d, z, a, b, star, k, i, paired, out)) return true;
+      if (try_parent(x, Stage::Maubach, d, z, a, b, star, k, i, paired, out))
+        return true;
     }
     return false;
   }
@@ -186,41 +205,48 @@ private:
     if constexpr (Dim < 3) {
       return false;
     } else {
-    const CellId y = star[i];
-    const VertexId *yx = m_.cell(y);
-    const int ty = m_.tag[y];
-    VertexId x[N];
-    if (m_.stage[y] == Stage::Opposite) {
-      // y = (z, new.., S\p) with ty new vertices; the parent has ty - 1.
-      const int t = ty - 1, old = N - ty; // |S \ p|
-      VertexId e = kNoVertex;
-      for (int j = ty; j < N; ++j)
-        if (yx[j] == a || yx[j] == b) e = yx[j] == a ? b : a;
-      if (e == kNoVertex) return false;
-      std::copy(yx + 1, yx + ty, x);
-      for (int place = 0; place <= old; ++place) {
-        VertexId *s = x + t;
-        std::copy(yx + ty, yx + ty + place, s);
-        s[place] = e;
-        std::copy(yx + ty + place, yx + N, s + place + 1);
-        if (try_parent(x, Stage::Opposite, t, z, a, b, star, k, i, paired, out)) return true;
+      const CellId y = star[i];
+      const VertexId *yx = m_.cell(y);
+      const int ty = m_.tag[y];
+      VertexId x[N];
+      if (m_.stage[y] == Stage::Opposite) {
+        // y = (z, new.., S\p) with ty new vertices; the parent has ty - 1.
+        const int t = ty - 1, old = N - ty; // |S \ p|
+        VertexId e = kNoVertex;
+        for (int j = ty; j < N; ++j)
+          if (yx[j] == a || yx[j] == b)
+            e = yx[j] == a ? b : a;
+        if (e == kNoVertex)
+          return false;
+        std::copy(yx + 1, yx + ty, x);
+        for (int place = 0; place <= old; ++place) {
+          VertexId *s = x + t;
+          std::copy(yx + ty, yx + ty + place, s);
+          s[place] = e;
+          std::copy(yx + ty + place, yx + N, s + place + 1);
+          if (try_parent(x, Stage::Opposite, t, z, a, b, star, k, i, paired, out))
+            return true;
+        }
+        return false;
       }
+      if (ty != 2)
+        return false;
+      // y = (alpha, gamma, beta, z, new..)_2; the parent (new.., S), S of 4.
+      const int t = Dim - 3;
+      VertexId s[4] = {yx[0], yx[1], yx[2], kNoVertex};
+      for (int j = 0; j < 3; ++j)
+        if (yx[j] == a || yx[j] == b)
+          s[3] = yx[j] == a ? b : a;
+      if (s[3] == kNoVertex)
+        return false;
+      std::copy(yx + 4, yx + N, x);
+      std::sort(s, s + 4);
+      do {
+        std::copy(s, s + 4, x + t);
+        if (try_parent(x, Stage::Opposite, t, z, a, b, star, k, i, paired, out))
+          return true;
+      } while (std::next_permutation(s, s + 4));
       return false;
-    }
-    if (ty != 2) return false;
-    // y = (alpha, gamma, beta, z, new..)_2; the parent (new.., S), S of 4.
-    const int t = Dim - 3;
-    VertexId s[4] = {yx[0], yx[1], yx[2], kNoVertex};
-    for (int j = 0; j < 3; ++j)
-      if (yx[j] == a || yx[j] == b) s[3] = yx[j] == a ? b : a;
-    if (s[3] == kNoVertex) return false;
-    std::copy(yx + 4, yx + N, x);
-    std::sort(s, s + 4);
-    do {
-      std::copy(s, s + 4, x + t);
-      if (try_parent(x, Stage::Opposite, t, z, a, b, star, k, i, paired, out)) return true;
-    } while (std::next_permutation(s, s + 4));
-    return false;
     }
   }
 
@@ -233,7 +259,8 @@ private:
     auto holds = [&](VertexId z, VertexId h) {
       return m_.parent_edge[2 * std::size_t(z)] == h || m_.parent_edge[2 * std::size_t(z) + 1] == h;
     };
-    if (!holds(x[1], x[0]) && holds(x[Dim - 1], x[Dim])) std::reverse(x, x + N);
+    if (!holds(x[1], x[0]) && holds(x[Dim - 1], x[Dim]))
+      std::reverse(x, x + N);
   }
 
   // The merges of this pass: for every created vertex whose star is all
@@ -247,11 +274,15 @@ private:
     std::vector<std::uint32_t> degree(nv + 1, 0), children(nv, 0);
     for (std::size_t c = 0; c < nc; ++c) {
       const VertexId *x = m_.cell(CellId(c));
-      for (int i = 0; i < N; ++i) ++degree[x[i]];
-      if (!marks_[c] || m_.generation[c] == 0) continue;
-      if (m_.stage[c] == Stage::Maubach && m_.tag[c] == Dim) orient(m_.cell(CellId(c)));
+      for (int i = 0; i < N; ++i)
+        ++degree[x[i]];
+      if (!marks_[c] || m_.generation[c] == 0)
+        continue;
+      if (m_.stage[c] == Stage::Maubach && m_.tag[c] == Dim)
+        orient(m_.cell(CellId(c)));
       const int k = new_vertex_index(m_.stage[c], m_.tag[c]);
-      if (k >= 0 && m_.parent_edge[2 * std::size_t(x[k])] != kNoVertex) ++children[x[k]];
+      if (k >= 0 && m_.parent_edge[2 * std::size_t(x[k])] != kNoVertex)
+        ++children[x[k]];
     }
     // Bucket the stars of the candidates: offsets in `start`.
     std::vector<std::uint32_t> &start = degree;
@@ -259,32 +290,40 @@ private:
     for (std::size_t v = 0; v < nv; ++v) {
       const std::uint32_t d = degree[v];
       start[v] = total;
-      if (children[v] == d && d > 0 && d % 2 == 0) total += d;
-      else children[v] = 0; // not a candidate
+      if (children[v] == d && d > 0 && d % 2 == 0)
+        total += d;
+      else
+        children[v] = 0; // not a candidate
     }
     start[nv] = total;
     std::vector<CellId> stars(total);
     std::vector<std::uint32_t> &fill = children;
-    for (std::size_t v = 0; v < nv; ++v) fill[v] = fill[v] ? start[v] : 0;
+    for (std::size_t v = 0; v < nv; ++v)
+      fill[v] = fill[v] ? start[v] : 0;
     for (std::size_t c = 0; c < nc; ++c) {
-      if (!marks_[c] || m_.generation[c] == 0) continue;
+      if (!marks_[c] || m_.generation[c] == 0)
+        continue;
       const int k = new_vertex_index(m_.stage[c], m_.tag[c]);
-      if (k < 0) continue;
+      if (k < 0)
+        continue;
       const VertexId z = m_.cell(CellId(c))[k];
-      if (start[z + 1] > start[z]) stars[fill[z]++] = CellId(c);
+      if (start[z + 1] > start[z])
+        stars[fill[z]++] = CellId(c);
     }
     std::vector<char> paired;
     std::vector<Merge> found;
     for (std::size_t v = 0; v < nv; ++v) {
       const std::size_t k = start[v + 1] - start[v];
-      if (k == 0) continue;
+      if (k == 0)
+        continue;
       const VertexId z = VertexId(v), a = m_.parent_edge[2 * v], b = m_.parent_edge[2 * v + 1];
       const CellId *star = stars.data() + start[v];
       paired.assign(k, 0);
       found.clear();
       bool ok = true;
       for (std::size_t i = 0; i < k && ok; ++i) {
-        if (paired[i]) continue;
+        if (paired[i])
+          continue;
         const CellId y = star[i];
         // Stage 1 parents come first for a tag-2 Maubach child young enough
         // to have entered Maubach from Stage 1 (generation <= n - 2).
@@ -304,7 +343,8 @@ private:
                  pair_stage1(z, a, b, star, k, i, paired, found);
         }
       }
-      if (!ok) continue;
+      if (!ok)
+        continue;
       merges_.insert(merges_.end(), found.begin(), found.end());
       removed_[v] = 1;
       ++removed_count_;
@@ -324,7 +364,8 @@ private:
     std::size_t w = 0;
     for (std::size_t c = 0; c < nc; ++c) {
       const std::uint32_t s = slot[c];
-      if (s == kNoCell - 1) continue;
+      if (s == kNoCell - 1)
+        continue;
       if (s == kNoCell) {
         std::copy(m_.cell(CellId(c)), m_.cell(CellId(c)) + N, m_.cell(CellId(w)));
         m_.stage[w] = m_.stage[c];
@@ -333,7 +374,8 @@ private:
         marks_[w] = marks_[c];
         for (DataArray &a : m_.cell_data) {
           const std::size_t k = std::size_t(a.components);
-          std::copy(a.values.begin() + c * k, a.values.begin() + (c + 1) * k, a.values.begin() + w * k);
+          std::copy(a.values.begin() + c * k, a.values.begin() + (c + 1) * k,
+                    a.values.begin() + w * k);
         }
       } else {
         const Merge &mg = merges_[s];
@@ -358,7 +400,8 @@ private:
     m_.tag.resize(w);
     m_.generation.resize(w);
     marks_.resize(w);
-    for (DataArray &a : m_.cell_data) a.values.resize(w * std::size_t(a.components));
+    for (DataArray &a : m_.cell_data)
+      a.values.resize(w * std::size_t(a.components));
   }
 
   void remove_vertices() {
@@ -366,13 +409,15 @@ private:
     std::vector<VertexId> id(nv, kNoVertex);
     std::size_t w = 0;
     for (std::size_t v = 0; v < nv; ++v) {
-      if (removed_[v]) continue;
+      if (removed_[v])
+        continue;
       id[v] = VertexId(w);
       std::copy(m_.coords.begin() + v * Dim, m_.coords.begin() + (v + 1) * Dim,
                 m_.coords.begin() + w * Dim);
       for (DataArray &a : m_.point_data) {
         const std::size_t k = std::size_t(a.components);
-        std::copy(a.values.begin() + v * k, a.values.begin() + (v + 1) * k, a.values.begin() + w * k);
+        std::copy(a.values.begin() + v * k, a.values.begin() + (v + 1) * k,
+                  a.values.begin() + w * k);
       }
       VertexId p = m_.parent_edge[2 * v], q = m_.parent_edge[2 * v + 1];
       if (p != kNoVertex) {
@@ -380,7 +425,8 @@ private:
         q = id[q];
         // Cannot happen for a tree bisect made (a vertex's parents are in
         // its star until it goes); a vertex that lost one becomes original.
-        if (p == kNoVertex || q == kNoVertex) p = q = kNoVertex;
+        if (p == kNoVertex || q == kNoVertex)
+          p = q = kNoVertex;
       }
       m_.parent_edge[2 * w] = p;
       m_.parent_edge[2 * w + 1] = q;
@@ -388,13 +434,16 @@ private:
     }
     m_.coords.resize(w * Dim);
     m_.parent_edge.resize(2 * w);
-    for (DataArray &a : m_.point_data) a.values.resize(w * std::size_t(a.components));
-    for (VertexId &x : m_.cells) x = id[x];
+    for (DataArray &a : m_.point_data)
+      a.values.resize(w * std::size_t(a.components));
+    for (VertexId &x : m_.cells)
+      x = id[x];
     if (!m_.edge_rank.empty()) {
       std::unordered_map<std::uint64_t, std::uint32_t> rank;
       for (const auto &[key, r] : m_.edge_rank) {
         const VertexId p = id[key >> 32], q = id[key & 0xffffffffu];
-        if (p != kNoVertex && q != kNoVertex) rank.emplace(edge_key(p, q), r);
+        if (p != kNoVertex && q != kNoVertex)
+          rank.emplace(edge_key(p, q), r);
       }
       m_.edge_rank = std::move(rank);
     }
@@ -419,7 +468,8 @@ CoarsenResult coarsen(Mesh &mesh, const std::vector<char> &marked_cells,
     throw UsageError("coarsen: " + std::to_string(marked_cells.size()) + " marks for " +
                      std::to_string(mesh.num_cells()) + " cells");
   CoarsenResult result;
-  if (!mesh.marked() || !mesh.has_tree()) return result;
+  if (!mesh.marked() || !mesh.has_tree())
+    return result;
   std::vector<char> marks = marked_cells;
   for (int p = 1; options.passes <= 0 || p <= options.passes; ++p) {
     CoarsenPass pass = dispatch(mesh.dim, [&]<int D>() {
@@ -427,8 +477,10 @@ CoarsenResult coarsen(Mesh &mesh, const std::vector<char> &marked_cells,
       return c.run_pass();
     });
     pass.pass = p;
-    if (on_pass) on_pass(pass);
-    if (pass.removed_vertices == 0) break;
+    if (on_pass)
+      on_pass(pass);
+    if (pass.removed_vertices == 0)
+      break;
     result.passes = p;
     result.removed_vertices += pass.removed_vertices;
     result.merged_pairs += pass.merged_pairs;

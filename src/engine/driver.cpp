@@ -21,7 +21,8 @@ double available_bytes() {
   std::string key, unit;
   double kb = 0;
   while (f >> key >> kb >> unit)
-    if (key == "MemAvailable:") return kb * 1024.0;
+    if (key == "MemAvailable:")
+      return kb * 1024.0;
   return 0;
 }
 
@@ -29,7 +30,8 @@ std::string with_commas(std::size_t n) {
   const std::string digits = std::to_string(n);
   std::string s;
   for (std::size_t i = 0; i < digits.size(); ++i) {
-    if (i > 0 && (digits.size() - i) % 3 == 0) s += ',';
+    if (i > 0 && (digits.size() - i) % 3 == 0)
+      s += ',';
     s += digits[i];
   }
   return s;
@@ -44,29 +46,35 @@ constexpr const char *kAncestorVolume = "bisect:ancestor_volume";
 // and a cell costs its ids, state and arrays twice over while vectors grow.
 std::string memory_shortfall(const Mesh &mesh, std::size_t selected, double max_gib) {
   double per_cell = 2.5 * (4.0 * (mesh.dim + 1) + 2.0) + 8.0;
-  for (const DataArray &a : mesh.cell_data) per_cell += 2.0 * 8.0 * a.components;
+  for (const DataArray &a : mesh.cell_data)
+    per_cell += 2.0 * 8.0 * a.components;
   // max_gib bounds the whole mesh; otherwise what it adds must fit in the
   // memory available now.
   double need = per_cell * 4.0 * double(selected);
-  if (max_gib > 0) need += per_cell * double(mesh.num_cells());
+  if (max_gib > 0)
+    need += per_cell * double(mesh.num_cells());
   const double avail = max_gib > 0 ? max_gib * 1073741824.0 : available_bytes();
-  if (avail <= 0 || need < 0.9 * avail) return {};
+  if (avail <= 0 || need < 0.9 * avail)
+    return {};
   char buf[160];
   std::snprintf(buf, sizeof buf, "it would need about %.2f GiB %s, %.2f GiB %s",
-                need / 1073741824.0, max_gib > 0 ? "in all" : "more memory",
-                avail / 1073741824.0, max_gib > 0 ? "allowed by --max-memory" : "available");
+                need / 1073741824.0, max_gib > 0 ? "in all" : "more memory", avail / 1073741824.0,
+                max_gib > 0 ? "allowed by --max-memory" : "available");
   return buf;
 }
 
-DriverResult run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
-                            const std::function<void(const IterationReport &, Mesh &)> &on_iteration) {
-  if (!mesh.marked()) throw CheckError("run_iterations: the mesh is not marked (ensure_marked)");
+DriverResult
+run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
+               const std::function<void(const IterationReport &, Mesh &)> &on_iteration) {
+  if (!mesh.marked())
+    throw CheckError("run_iterations: the mesh is not marked (ensure_marked)");
   DriverResult result;
   // The invariants every check compares with (the Euler characteristic only
   // for the full check: it is the costly part).
   const Invariants before = measure_invariants(mesh, options.check_every_iteration);
   RefineLimits limits;
-  if (options.max_cells) limits.max_cells = options.max_cells;
+  if (options.max_cells)
+    limits.max_cells = options.max_cells;
   limits.cancel = options.cancel;
   result.quality = quality_summary(mesh);
   for (int it = 1; it <= options.iterations; ++it) {
@@ -123,12 +131,14 @@ DriverResult run_iterations(Mesh &mesh, const Selector &select, const DriverOpti
     report.seconds = seconds_since(t0);
     result.bisections += r.bisections;
     result.iterations = it;
-    if (on_iteration) on_iteration(report, mesh);
+    if (on_iteration)
+      on_iteration(report, mesh);
     if (options.check_every_iteration) {
       const auto t_check = std::chrono::steady_clock::now();
       const CheckResult c = check_conformity(mesh, &before);
       result.check_seconds += seconds_since(t_check);
-      if (!c.ok) throw CheckError("after iteration " + std::to_string(it) + ": " + c.failure);
+      if (!c.ok)
+        throw CheckError("after iteration " + std::to_string(it) + ": " + c.failure);
     }
     if (selected.empty()) { // the same would hold for every later iteration
       result.stop = StopReason::NothingSelected;
@@ -141,7 +151,8 @@ DriverResult run_iterations(Mesh &mesh, const Selector &select, const DriverOpti
     const auto t_check = std::chrono::steady_clock::now();
     const CheckResult c = check_refined(mesh, before);
     result.check_seconds += seconds_since(t_check);
-    if (!c.ok) throw CheckError("on the refined mesh: " + c.failure);
+    if (!c.ok)
+      throw CheckError("on the refined mesh: " + c.failure);
   }
   return result;
 }
@@ -152,9 +163,12 @@ DriverResult run_iterations(Mesh &mesh, const Selector &select, const DriverOpti
 // volume is a temporary cell array, inherited by their children.
 RefineResult refine_marked(Mesh &mesh, const std::vector<CellId> &marked, int depth,
                            const RefineLimits &limits) {
-  if (depth < 1) throw UsageError("refine_marked: depth must be at least 1");
-  if (depth == 1 || marked.empty()) return refine(mesh, marked, limits);
-  if (!mesh.marked()) throw CheckError("refine_marked: the mesh is not marked");
+  if (depth < 1)
+    throw UsageError("refine_marked: depth must be at least 1");
+  if (depth == 1 || marked.empty())
+    return refine(mesh, marked, limits);
+  if (!mesh.marked())
+    throw CheckError("refine_marked: the mesh is not marked");
   auto volume = [&](CellId c) {
     double pts[5 * 4];
     cell_points(mesh, c, pts);
@@ -165,7 +179,8 @@ RefineResult refine_marked(Mesh &mesh, const std::vector<CellId> &marked, int de
   const Mesh saved = mesh;
   mesh.cell_data.push_back({kAncestorVolume, 1, std::vector<double>(mesh.num_cells(), 0.0)});
   std::size_t slot = mesh.cell_data.size() - 1;
-  for (CellId c : marked) mesh.cell_data[slot].values.at(c) = volume(c);
+  for (CellId c : marked)
+    mesh.cell_data[slot].values.at(c) = volume(c);
   RefineResult total;
   std::vector<CellId> round = marked;
   for (int r = 0; r < depth && !round.empty(); ++r) {
@@ -176,7 +191,8 @@ RefineResult refine_marked(Mesh &mesh, const std::vector<CellId> &marked, int de
       undone.selected = marked.size();
       return undone;
     }
-    if (r == 0) total.selected = step.selected;
+    if (r == 0)
+      total.selected = step.selected;
     total.bisections += step.bisections;
     total.closure_passes += step.closure_passes + (r > 0);
     total.kernel_seconds += step.kernel_seconds;
@@ -187,9 +203,11 @@ RefineResult refine_marked(Mesh &mesh, const std::vector<CellId> &marked, int de
                        mesh.cell_data.begin());
     const std::vector<double> &anc = mesh.cell_data[slot].values;
     for (std::size_t c = 0; c < mesh.num_cells(); ++c) {
-      if (anc[c] <= 0) continue;
+      if (anc[c] <= 0)
+        continue;
       const double g = std::log2(anc[c] / volume(CellId(c)));
-      if (std::lround(g) < depth) round.push_back(CellId(c));
+      if (std::lround(g) < depth)
+        round.push_back(CellId(c));
     }
   }
   mesh.cell_data.erase(mesh.cell_data.begin() + std::ptrdiff_t(slot));

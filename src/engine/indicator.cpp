@@ -34,7 +34,8 @@ std::vector<CellId> mark_by_indicator(const std::vector<double> &values, Indicat
   switch (rule) {
   case IndicatorRule::Above:
   case IndicatorRule::Below:
-    if (!std::isfinite(parameter)) throw UsageError("the threshold must be a finite number");
+    if (!std::isfinite(parameter))
+      throw UsageError("the threshold must be a finite number");
     for (std::size_t c = 0; c < values.size(); ++c)
       if (rule == IndicatorRule::Above ? values[c] > parameter : values[c] < parameter)
         out.push_back(CellId(c));
@@ -42,7 +43,8 @@ std::vector<CellId> mark_by_indicator(const std::vector<double> &values, Indicat
   case IndicatorRule::Top: {
     if (!(parameter > 0 && parameter <= 1))
       throw UsageError("--top takes a fraction F with 0 < F <= 1, not " + number(parameter));
-    const std::size_t k = std::min(values.size(), std::size_t(std::ceil(parameter * double(values.size()))));
+    const std::size_t k =
+        std::min(values.size(), std::size_t(std::ceil(parameter * double(values.size()))));
     std::vector<CellId> ids = by_value(values);
     out.assign(ids.begin(), ids.begin() + std::ptrdiff_t(k));
     break;
@@ -53,16 +55,19 @@ std::vector<CellId> mark_by_indicator(const std::vector<double> &values, Indicat
     double total = 0;
     for (std::size_t c = 0; c < values.size(); ++c) {
       if (values[c] < 0)
-        throw InputError(file, "cell " + std::to_string(c) + ": indicator value " + number(values[c]) +
+        throw InputError(file, "cell " + std::to_string(c) + ": indicator value " +
+                                   number(values[c]) +
                                    " is negative (Dorfler marking sums squares of values >= 0)");
       total += values[c] * values[c];
     }
-    if (total == 0) return out; // nothing to refine
+    if (total == 0)
+      return out; // nothing to refine
     std::vector<CellId> ids = by_value(values);
     double sum = 0;
     const double goal = parameter * total;
     for (CellId c : ids) {
-      if (sum >= goal) break;
+      if (sum >= goal)
+        break;
       out.push_back(c);
       sum += values[c] * values[c];
     }
@@ -73,18 +78,23 @@ std::vector<CellId> mark_by_indicator(const std::vector<double> &values, Indicat
   return out;
 }
 
-std::vector<double> cell_indicator(const Mesh &mesh, const std::string &name, const std::string &file) {
+std::vector<double> cell_indicator(const Mesh &mesh, const std::string &name,
+                                   const std::string &file) {
   auto find = [&](const std::vector<DataArray> &arrays) -> const DataArray * {
     for (const DataArray &a : arrays)
-      if (a.name == name) return &a;
+      if (a.name == name)
+        return &a;
     return nullptr;
   };
   const DataArray *cell = find(mesh.cell_data), *point = cell ? nullptr : find(mesh.point_data);
   if (!cell && !point) {
     std::string have;
-    for (const DataArray &a : mesh.cell_data) have += (have.empty() ? "" : ", ") + ("cell array '" + a.name + "'");
-    for (const DataArray &a : mesh.point_data) have += (have.empty() ? "" : ", ") + ("point array '" + a.name + "'");
-    throw InputError(file, "no cell or point array '" + name + "' for the indicator (the file has " +
+    for (const DataArray &a : mesh.cell_data)
+      have += (have.empty() ? "" : ", ") + ("cell array '" + a.name + "'");
+    for (const DataArray &a : mesh.point_data)
+      have += (have.empty() ? "" : ", ") + ("point array '" + a.name + "'");
+    throw InputError(file, "no cell or point array '" + name +
+                               "' for the indicator (the file has " +
                                (have.empty() ? std::string("no arrays") : have) + ")");
   }
   const DataArray &a = cell ? *cell : *point;
@@ -94,15 +104,17 @@ std::vector<double> cell_indicator(const Mesh &mesh, const std::string &name, co
                                " components; an indicator has one value per cell or vertex");
   for (std::size_t i = 0; i < a.values.size(); ++i)
     if (!std::isfinite(a.values[i]))
-      throw InputError(file, std::string(cell ? "cell " : "vertex ") + std::to_string(i) + ": indicator '" +
-                                 name + "' is " + number(a.values[i]));
-  if (cell) return a.values;
+      throw InputError(file, std::string(cell ? "cell " : "vertex ") + std::to_string(i) +
+                                 ": indicator '" + name + "' is " + number(a.values[i]));
+  if (cell)
+    return a.values;
   std::vector<double> out(mesh.num_cells());
   const int n = mesh.cell_size();
   for (std::size_t c = 0; c < out.size(); ++c) {
     const VertexId *x = mesh.cell(CellId(c));
     double v = a.values[x[0]];
-    for (int i = 1; i < n; ++i) v = std::max(v, a.values[x[i]]);
+    for (int i = 1; i < n; ++i)
+      v = std::max(v, a.values[x[i]]);
     out[c] = v;
   }
   return out;

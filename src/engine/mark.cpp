@@ -4,9 +4,9 @@
 #include "bisect/mark.hpp"
 
 #include "bisect/check.hpp"
+#include "bisect/measure.hpp"
 #include "core/dimension.hpp"
 #include "core/geometry.hpp"
-#include "bisect/measure.hpp"
 #include "core/numbering.hpp"
 
 #include <algorithm>
@@ -19,7 +19,8 @@ namespace bisect {
 namespace {
 
 double squared_length(const EdgeOrder &o, VertexId a, VertexId b) {
-  if (a > b) std::swap(a, b);
+  if (a > b)
+    std::swap(a, b);
   return geometry::squared_distance(o.coords->data() + std::size_t(a) * o.dim,
                                     o.coords->data() + std::size_t(b) * o.dim, o.dim);
 }
@@ -27,18 +28,22 @@ double squared_length(const EdgeOrder &o, VertexId a, VertexId b) {
 } // namespace
 
 bool EdgeOrder::before(VertexId a, VertexId b, VertexId c, VertexId d) const {
-  if (a > b) std::swap(a, b);
-  if (c > d) std::swap(c, d);
+  if (a > b)
+    std::swap(a, b);
+  if (c > d)
+    std::swap(c, d);
   if (marking == Marking::Longest) {
     double lab = squared_length(*this, a, b), lcd = squared_length(*this, c, d);
-    if (lab != lcd) return lab > lcd;
+    if (lab != lcd)
+      return lab > lcd;
   } else if (marking == Marking::Explicit) {
     auto find = [&](VertexId p, VertexId q) {
       auto it = rank->find(edge_key(p, q));
       return it == rank->end() ? std::uint64_t(1) << 32 : std::uint64_t(it->second);
     };
     std::uint64_t rab = find(a, b), rcd = find(c, d);
-    if (rab != rcd) return rab < rcd;
+    if (rab != rcd)
+      return rab < rcd;
   }
   return a != c ? a < c : b < d;
 }
@@ -51,8 +56,7 @@ EdgePick consistent_edge(const EdgeOrder &order, const VertexId *ids, int count)
   EdgePick best{0, 1};
   for (int i = 0; i < count; ++i)
     for (int j = i + 1; j < count; ++j)
-      if ((i || j != 1) &&
-          order.before(ids[i], ids[j], ids[best.first], ids[best.second]))
+      if ((i || j != 1) && order.before(ids[i], ids[j], ids[best.first], ids[best.second]))
         best = EdgePick{i, j};
   return best;
 }
@@ -80,16 +84,19 @@ void opposite_children(const EdgeOrder &order, const VertexId *x, int n, int t, 
     VertexId old[5];
     int n_old = 0;
     for (int i = t; i < nv; ++i)
-      if (i != drop) old[n_old++] = x[i];
+      if (i != drop)
+        old[n_old++] = x[i];
     if (n_old == 3) { // the old part is a triangle: enter Maubach
       triangle_tuple(order, old, out);
       out[3] = z;
-      for (int i = 0; i < t && 4 + i < nv; ++i) out[4 + i] = x[i];
+      for (int i = 0; i < t && 4 + i < nv; ++i)
+        out[4 + i] = x[i];
       child_stage = Stage::Maubach;
       child_tag = 2;
     } else {
       out[0] = z;
-      for (int i = 0; i < t && 1 + i < nv; ++i) out[1 + i] = x[i];
+      for (int i = 0; i < t && 1 + i < nv; ++i)
+        out[1 + i] = x[i];
       std::copy(old, old + n_old, out + 1 + t);
     }
   }
@@ -100,9 +107,9 @@ namespace {
 // For a tet with refinement edge (a, b) = ids[ea], ids[eb]: the marks of the
 // faces opposite a and b, as vertex pairs.
 struct TetMarks {
-  VertexId a, b;          // refinement edge
-  VertexId m1[2], m2[2];  // marks of the faces opposite a and opposite b
-  VertexId c, d;          // the two other vertices
+  VertexId a, b;         // refinement edge
+  VertexId m1[2], m2[2]; // marks of the faces opposite a and opposite b
+  VertexId c, d;         // the two other vertices
 };
 
 TetMarks tet_marks(const EdgeOrder &order, const VertexId *ids) {
@@ -112,7 +119,8 @@ TetMarks tet_marks(const EdgeOrder &order, const VertexId *ids) {
   m.b = ids[e.second];
   int rest[2], r = 0;
   for (int i = 0; i < 4; ++i)
-    if (i != e.first && i != e.second) rest[r++] = i;
+    if (i != e.first && i != e.second)
+      rest[r++] = i;
   m.c = ids[rest[0]];
   m.d = ids[rest[1]];
   VertexId fa[3] = {m.b, m.c, m.d}, fb[3] = {m.a, m.c, m.d};
@@ -124,16 +132,22 @@ TetMarks tet_marks(const EdgeOrder &order, const VertexId *ids) {
   return m;
 }
 
-bool contains(const VertexId *e, VertexId v) { return e[0] == v || e[1] == v; }
-VertexId other(const VertexId *e, VertexId v) { return e[0] == v ? e[1] : e[0]; }
+bool contains(const VertexId *e, VertexId v) {
+  return e[0] == v || e[1] == v;
+}
+VertexId other(const VertexId *e, VertexId v) {
+  return e[0] == v ? e[1] : e[0];
+}
 
 } // namespace
 
 TetType classify_tet(const EdgeOrder &order, const VertexId *ids) {
   TetMarks m = tet_marks(order, ids);
   bool t1 = contains(m.m1, m.b), t2 = contains(m.m2, m.a); // mark touches the refinement edge
-  if (t1 && t2) return other(m.m1, m.b) == other(m.m2, m.a) ? TetType::Planar : TetType::Adjacent;
-  if (t1 || t2) return TetType::Mixed;
+  if (t1 && t2)
+    return other(m.m1, m.b) == other(m.m2, m.a) ? TetType::Planar : TetType::Adjacent;
+  if (t1 || t2)
+    return TetType::Mixed;
   return TetType::Opposite;
 }
 
@@ -141,38 +155,49 @@ namespace {
 
 char type_letter(TetType t) {
   switch (t) {
-  case TetType::Planar: return 'P';
-  case TetType::Adjacent: return 'A';
-  case TetType::Opposite: return 'O';
-  case TetType::Mixed: return 'M';
+  case TetType::Planar:
+    return 'P';
+  case TetType::Adjacent:
+    return 'A';
+  case TetType::Opposite:
+    return 'O';
+  case TetType::Mixed:
+    return 'M';
   }
   return '?';
 }
 
-int letter_rank(char c) { return int(std::string_view("PAOM").find(c)); }
+int letter_rank(char c) {
+  return int(std::string_view("PAOM").find(c));
+}
 
 } // namespace
 
 std::string simplex_type(const EdgeOrder &order, const VertexId *ids, int dim) {
-  if (dim == 3) return std::string(1, type_letter(classify_tet(order, ids)));
-  if (dim != 4) return "";
+  if (dim == 3)
+    return std::string(1, type_letter(classify_tet(order, ids)));
+  if (dim != 4)
+    return "";
   // Level 0 (a, b); level 1: the consistent edges of the tets opposite a and b.
   EdgePick e = consistent_edge(order, ids, 5);
   VertexId a = ids[e.first], b = ids[e.second];
   VertexId ta[4], tb[4];
   for (int i = 0, ka = 0, kb = 0; i < 5; ++i) {
-    if (ids[i] != a) ta[ka++] = ids[i];
-    if (ids[i] != b) tb[kb++] = ids[i];
+    if (ids[i] != a)
+      ta[ka++] = ids[i];
+    if (ids[i] != b)
+      tb[kb++] = ids[i];
   }
   EdgePick pa = consistent_edge(order, ta, 4), pb = consistent_edge(order, tb, 4);
   VertexId ma[2] = {ta[pa.first], ta[pa.second]}, mb[2] = {tb[pb.first], tb[pb.second]};
   bool t1 = contains(ma, b), t2 = contains(mb, a);
-  TetType alpha = t1 && t2 ? (other(ma, b) == other(mb, a) ? TetType::Planar : TetType::Adjacent)
+  TetType alpha = t1 && t2   ? (other(ma, b) == other(mb, a) ? TetType::Planar : TetType::Adjacent)
                   : t1 || t2 ? TetType::Mixed
                              : TetType::Opposite;
   // Level 2 relative to level 1 is the tet classification of each face.
   char beta = type_letter(classify_tet(order, ta)), gamma = type_letter(classify_tet(order, tb));
-  if (letter_rank(gamma) < letter_rank(beta)) std::swap(beta, gamma);
+  if (letter_rank(gamma) < letter_rank(beta))
+    std::swap(beta, gamma);
   return std::string{type_letter(alpha), '_', beta, gamma};
 }
 
@@ -183,12 +208,14 @@ void force_type(Mesh &mesh, const std::string &type) {
   const VertexId *x = mesh.cell(0);
   std::vector<std::uint64_t> edges;
   for (int i = 0; i < nv; ++i)
-    for (int j = i + 1; j < nv; ++j) edges.push_back(edge_key(x[i], x[j]));
+    for (int j = i + 1; j < nv; ++j)
+      edges.push_back(edge_key(x[i], x[j]));
   // Every ranking of the edges is a global edge order; try them in a fixed
   // pseudo-random sequence (deterministic output) and keep the first whose
   // marks have the type asked for.
   std::vector<std::uint32_t> perm(edges.size());
-  for (std::size_t i = 0; i < perm.size(); ++i) perm[i] = std::uint32_t(i);
+  for (std::size_t i = 0; i < perm.size(); ++i)
+    perm[i] = std::uint32_t(i);
   std::unordered_map<std::uint64_t, std::uint32_t> rank;
   EdgeOrder order{Marking::Explicit, &mesh.coords, n, &rank};
   std::uint64_t state = 0x9e3779b97f4a7c15ull;
@@ -203,25 +230,29 @@ void force_type(Mesh &mesh, const std::string &type) {
       std::swap(perm[i], perm[z % (i + 1)]);
     }
     rank.clear();
-    for (std::size_t i = 0; i < edges.size(); ++i) rank[edges[i]] = perm[i];
+    for (std::size_t i = 0; i < edges.size(); ++i)
+      rank[edges[i]] = perm[i];
     std::string t = simplex_type(order, x, n);
     if (t == type) {
       mesh.edge_rank = rank;
       mark_mesh(mesh, Marking::Explicit);
       return;
     }
-    if (std::find(seen.begin(), seen.end(), t) == seen.end()) seen.push_back(t);
+    if (std::find(seen.begin(), seen.end(), t) == seen.end())
+      seen.push_back(t);
   }
   std::sort(seen.begin(), seen.end());
   std::string list;
-  for (const std::string &t : seen) list += (list.empty() ? "" : ", ") + t;
+  for (const std::string &t : seen)
+    list += (list.empty() ? "" : ", ") + t;
   throw UsageError("type " + type + " does not arise from any edge order of a " +
-                              (n == 3 ? std::string("tetrahedron") : std::string("pentatope")) +
-                              "; the types that do: " + list);
+                   (n == 3 ? std::string("tetrahedron") : std::string("pentatope")) +
+                   "; the types that do: " + list);
 }
 
 bool ensure_marked(Mesh &mesh, Marking marking) {
-  if (mesh.marked()) return false;
+  if (mesh.marked())
+    return false;
   mark_mesh(mesh, marking);
   return true;
 }
@@ -243,8 +274,8 @@ void mark_mesh(Mesh &mesh, Marking marking) {
       triangle_tuple(order, t, x);
     } else if (n == 3) {
       TetMarks m = tet_marks(order, x);
-      bool planar = contains(m.m1, m.b) && contains(m.m2, m.a) &&
-                    other(m.m1, m.b) == other(m.m2, m.a);
+      bool planar =
+          contains(m.m1, m.b) && contains(m.m2, m.a) && other(m.m1, m.b) == other(m.m2, m.a);
       if (planar) { // Pu: refinement (a, b), marks (b, c), (a, c) -> (a, c, b, d)_2
         VertexId c3 = other(m.m1, m.b), d3 = (c3 == m.c) ? m.d : m.c;
         x[0] = m.a, x[1] = c3, x[2] = m.b, x[3] = d3;
@@ -295,14 +326,16 @@ private:
   void start(const VertexId *x, Stage s, int t, int opposite) {
     VertexId piece[Dim];
     for (int i = 0, k = 0; i < N; ++i)
-      if (i != opposite) piece[k++] = x[i];
+      if (i != opposite)
+        piece[k++] = x[i];
     walk(x, s, t, piece, 0);
   }
 
   VertexId label(VertexId a, VertexId b) {
     const std::uint64_t key = edge_key(a, b);
     for (const auto &[k, v] : mids_)
-      if (k == key) return v;
+      if (k == key)
+        return v;
     const VertexId z = first_ + VertexId(mids_.size());
     mids_.emplace_back(key, z);
     return z;
@@ -349,7 +382,8 @@ private:
       const VertexId *with_a = holds(c1, N, a) ? c1 : c2, *with_b = with_a == c1 ? c2 : c1;
       if (has_a && has_b) {
         note(edge_key(a, b));
-        if (level + 1 == state_check_levels(Dim) || differs_) return;
+        if (level + 1 == state_check_levels(Dim) || differs_)
+          return;
         VertexId keep_a[Dim], keep_b[Dim];
         for (int i = 0; i < Dim; ++i) {
           keep_a[i] = piece[i] == b ? z : piece[i];
@@ -381,17 +415,20 @@ private:
 
 std::string id_tuple(const VertexId *x, int count) {
   std::string s = "(";
-  for (int i = 0; i < count; ++i) s += (i ? ", " : "") + std::to_string(x[i]);
+  for (int i = 0; i < count; ++i)
+    s += (i ? ", " : "") + std::to_string(x[i]);
   return s + ")";
 }
 
 } // namespace
 
 std::string check_state_consistency(const Mesh &mesh) {
-  if (mesh.dim < 3 || !mesh.marked() || mesh.num_cells() < 2) return {};
+  if (mesh.dim < 3 || !mesh.marked() || mesh.num_cells() < 2)
+    return {};
   const EdgeOrder order = edge_order(mesh);
   const VertexId first_label = VertexId(mesh.num_vertices());
-  if (std::size_t(first_label) + 4096 >= std::size_t(kNoVertex)) return {}; // no room for labels
+  if (std::size_t(first_label) + 4096 >= std::size_t(kNoVertex))
+    return {}; // no room for labels
   std::string failure;
   dispatch(mesh.dim, [&]<int D>() {
     FacetWalk<D> walk(order, first_label);
@@ -406,23 +443,28 @@ std::string check_state_consistency(const Mesh &mesh) {
       const VertexId *x = mesh.cell(a), *y = mesh.cell(b);
       for (int flip = 0; flip < 2; ++flip) {
         const int ja = flip && i <= d ? d - i : i; // position of a's opposite vertex
-        if (ja != j) continue;
+        if (ja != j)
+          continue;
         bool same = true;
         for (int k = 0; k <= D && same; ++k) {
           const int from = flip && k <= d ? d - k : k;
           same = k == j || x[from] == y[k];
         }
-        if (same) return true;
+        if (same)
+          return true;
       }
       return false;
     };
     for_each_interior_facet(mesh, [&](CellId a, int i, CellId b, int j) {
-      if (reflected(a, i, b, j)) return true;
+      if (reflected(a, i, b, j))
+        return true;
       walk.record(mesh.cell(a), mesh.stage[a], mesh.tag[a], i);
-      if (walk.same(mesh.cell(b), mesh.stage[b], mesh.tag[b], j)) return true;
+      if (walk.same(mesh.cell(b), mesh.stage[b], mesh.tag[b], j))
+        return true;
       VertexId facet[4];
       for (int k = 0, m = 0; k <= D; ++k)
-        if (k != i) facet[m++] = mesh.cell(a)[k];
+        if (k != i)
+          facet[m++] = mesh.cell(a)[k];
       std::sort(facet, facet + D);
       failure = "cells " + std::to_string(a) + " and " + std::to_string(b) +
                 " would bisect their shared facet " + id_tuple(facet, D) + " differently";
@@ -433,19 +475,27 @@ std::string check_state_consistency(const Mesh &mesh) {
 }
 
 std::optional<Marking> parse_marking(const std::string &name) {
-  if (name == "index") return Marking::Index;
-  if (name == "longest") return Marking::Longest;
-  if (name == "sorted") return Marking::Sorted;
-  if (name == "explicit") return Marking::Explicit;
+  if (name == "index")
+    return Marking::Index;
+  if (name == "longest")
+    return Marking::Longest;
+  if (name == "sorted")
+    return Marking::Sorted;
+  if (name == "explicit")
+    return Marking::Explicit;
   return std::nullopt;
 }
 
 const char *marking_name(Marking marking) {
   switch (marking) {
-  case Marking::Index: return "index";
-  case Marking::Longest: return "longest";
-  case Marking::Sorted: return "sorted";
-  case Marking::Explicit: return "explicit";
+  case Marking::Index:
+    return "index";
+  case Marking::Longest:
+    return "longest";
+  case Marking::Sorted:
+    return "sorted";
+  case Marking::Explicit:
+    return "explicit";
   }
   return "?";
 }

@@ -8,8 +8,8 @@
 // iteration is conforming no cell has an edge that was bisected.
 #include "bisect/refine.hpp"
 
-#include "core/dimension.hpp"
 #include "bisect/mark.hpp"
+#include "core/dimension.hpp"
 #include "core/numbering.hpp"
 
 #include <algorithm>
@@ -26,21 +26,27 @@ namespace {
 class MidpointMap {
 public:
   static std::uint64_t key(VertexId a, VertexId b) {
-    if (a > b) std::swap(a, b);
+    if (a > b)
+      std::swap(a, b);
     return std::uint64_t(a) << 32 | b;
   }
   VertexId find(std::uint64_t k) const {
-    if (size_ == 0) return kNoVertex;
+    if (size_ == 0)
+      return kNoVertex;
     for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
-      if (keys_[i] == k) return values_[i];
-      if (keys_[i] == 0) return kNoVertex;
+      if (keys_[i] == k)
+        return values_[i];
+      if (keys_[i] == 0)
+        return kNoVertex;
     }
   }
   // Returns the slot's value, inserting `value` when k is absent.
   VertexId insert(std::uint64_t k, VertexId value) {
-    if ((size_ + 1) * 2 > keys_.size()) grow();
+    if ((size_ + 1) * 2 > keys_.size())
+      grow();
     for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
-      if (keys_[i] == k) return values_[i];
+      if (keys_[i] == k)
+        return values_[i];
       if (keys_[i] == 0) {
         keys_[i] = k;
         values_[i] = value;
@@ -71,7 +77,8 @@ private:
     mask_ = cap - 1;
     size_ = 0;
     for (std::size_t i = 0; i < keys.size(); ++i)
-      if (keys[i]) insert(keys[i], values[i]);
+      if (keys[i])
+        insert(keys[i], values[i]);
   }
   std::vector<std::uint64_t> keys_;
   std::vector<VertexId> values_;
@@ -106,17 +113,20 @@ public:
     // when a selected cell's edge is near the precision limit, keep the undo
     // log so that passing it anywhere undoes the iteration.
     for (CellId c : work)
-      if (!logging_ && resolution(refinement_edge(c)) < 1024) logging_ = true;
+      if (!logging_ && resolution(refinement_edge(c)) < 1024)
+        logging_ = true;
     try {
       std::vector<std::uint8_t> flag;
       std::vector<std::uint64_t> seen;
       std::vector<CellId> candidates;
       while (!work.empty()) {
-        if (limits_.cancel && limits_.cancel->load()) throw Cancelled{};
+        if (limits_.cancel && limits_.cancel->load())
+          throw Cancelled{};
         const std::size_t cells_before = m_.num_cells(), verts_before = m_.num_vertices();
         reserve(work.size());
         const auto t0 = std::chrono::steady_clock::now();
-        for (CellId c : work) bisect(c);
+        for (CellId c : work)
+          bisect(c);
         result.kernel_seconds +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         result.bisections += work.size();
@@ -132,8 +142,10 @@ public:
             candidates.push_back(CellId(c));
           }
         };
-        for (CellId c : work) add(c);
-        for (std::size_t c = cells_before; c < m_.num_cells(); ++c) add(c);
+        for (CellId c : work)
+          add(c);
+        for (std::size_t c = cells_before; c < m_.num_cells(); ++c)
+          add(c);
         if (m_.num_vertices() > verts_before) {
           flag.assign(m_.num_vertices(), 0);
           for (std::size_t v = verts_before; v < m_.num_vertices(); ++v) {
@@ -143,14 +155,18 @@ public:
           for (std::size_t c = 0; c < cells_before; ++c) {
             const VertexId *x = m_.cell(CellId(c));
             int hits = 0;
-            for (int i = 0; i < N; ++i) hits += flag[x[i]];
-            if (hits >= 2) add(c);
+            for (int i = 0; i < N; ++i)
+              hits += flag[x[i]];
+            if (hits >= 2)
+              add(c);
           }
         }
         work.clear();
         for (CellId c : candidates)
-          if (has_hanging_edge(c)) work.push_back(c);
-        if (!work.empty()) ++result.closure_passes;
+          if (has_hanging_edge(c))
+            work.push_back(c);
+        if (!work.empty())
+          ++result.closure_passes;
       }
     } catch (const LimitReached &) {
       undo();
@@ -172,7 +188,8 @@ public:
 private:
   std::pair<VertexId, VertexId> refinement_edge(CellId c) const {
     const VertexId *x = m_.cell(c);
-    if (m_.stage[c] == Stage::Maubach) return {x[0], x[m_.tag[c]]};
+    if (m_.stage[c] == Stage::Maubach)
+      return {x[0], x[m_.tag[c]]};
     const EdgePick e = opposite_edge(order_, x, Dim, m_.tag[c]);
     return {x[e.first], x[e.second]};
   }
@@ -200,7 +217,8 @@ private:
 
   void reserve(std::size_t extra) {
     std::size_t need = m_.num_cells() + extra;
-    if (need > limits_.max_cells && logging_) throw LimitReached{};
+    if (need > limits_.max_cells && logging_)
+      throw LimitReached{};
     if (m_.cells.capacity() < need * N) {
       std::size_t cap = std::max(need, m_.num_cells() + m_.num_cells() / 4);
       m_.cells.reserve(cap * N);
@@ -214,18 +232,22 @@ private:
     std::uint64_t k = MidpointMap::key(a, b);
     VertexId next = VertexId(m_.num_vertices());
     VertexId z = mids_.insert(k, next);
-    if (z != next) return z;
+    if (z != next)
+      return z;
     if (std::size_t(next) + 1 > limits_.max_vertices) {
-      if (logging_) throw LimitReached{};
+      if (logging_)
+        throw LimitReached{};
       throw CheckError("vertex ids would overflow 32 bits");
     }
     if (!(resolution({a, b}) >= 1)) {
-      if (logging_) throw PrecisionReached{};
+      if (logging_)
+        throw PrecisionReached{};
       throw CheckError("closure would bisect an edge below the precision limit");
     }
     const double *p = m_.point(a), *q = m_.point(b);
     double mid[Dim];
-    for (int k2 = 0; k2 < Dim; ++k2) mid[k2] = 0.5 * (p[k2] + q[k2]);
+    for (int k2 = 0; k2 < Dim; ++k2)
+      mid[k2] = 0.5 * (p[k2] + q[k2]);
     m_.coords.insert(m_.coords.end(), mid, mid + Dim);
     m_.parent_edge.push_back(a);
     m_.parent_edge.push_back(b);
@@ -268,8 +290,10 @@ private:
       append(c2, Stage::Maubach, t2, std::uint16_t(g + 1), c);
       return;
     }
-    if constexpr (Dim >= 3) bisect_stage1(c, x, t);
-    else throw CheckError("Stage 1 cell in a 2D mesh");
+    if constexpr (Dim >= 3)
+      bisect_stage1(c, x, t);
+    else
+      throw CheckError("Stage 1 cell in a 2D mesh");
   }
 
   // Stage 1: x = (new vertices (t of them), old sub-simplex).
@@ -327,7 +351,8 @@ private:
         a.values.resize(m_.num_vertices() * k);
         for (std::size_t i = 0; i < made; ++i)
           for (std::size_t j = 0; j < k; ++j) {
-            const double p = a.values[parents[2 * i] * k + j], q = a.values[parents[2 * i + 1] * k + j];
+            const double p = a.values[parents[2 * i] * k + j],
+                         q = a.values[parents[2 * i + 1] * k + j];
             a.values[(nv0_ + i) * k + j] = p == q ? p : none;
           }
         continue;
@@ -335,8 +360,8 @@ private:
       a.values.resize(m_.num_vertices() * k);
       for (std::size_t i = 0; i < made; ++i)
         for (std::size_t j = 0; j < k; ++j)
-          a.values[(nv0_ + i) * k + j] = 0.5 * (a.values[parents[2 * i] * k + j] +
-                                                a.values[parents[2 * i + 1] * k + j]);
+          a.values[(nv0_ + i) * k + j] =
+              0.5 * (a.values[parents[2 * i] * k + j] + a.values[parents[2 * i + 1] * k + j]);
     }
   }
 
@@ -354,13 +379,14 @@ private:
   std::size_t nc0_, nv0_;
   bool logging_ = false;
   MidpointMap mids_;
-  std::vector<CellId> origin_;    // per appended cell: the input cell it descends from
+  std::vector<CellId> origin_;         // per appended cell: the input cell it descends from
   std::vector<std::uint8_t> endpoint_; // per vertex: 1 if an end of an edge bisected so far
   std::vector<UndoEntry> log_;
 };
 
 template <int Dim>
-RefineResult refine_dim(Mesh &mesh, const std::vector<CellId> &selected, const RefineLimits &limits) {
+RefineResult refine_dim(Mesh &mesh, const std::vector<CellId> &selected,
+                        const RefineLimits &limits) {
   Refiner<Dim> r(mesh, limits);
   return r.run(selected);
 }
@@ -368,7 +394,8 @@ RefineResult refine_dim(Mesh &mesh, const std::vector<CellId> &selected, const R
 } // namespace
 
 RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected, const RefineLimits &limits) {
-  if (!mesh.marked()) throw CheckError("refine: the mesh is not marked");
+  if (!mesh.marked())
+    throw CheckError("refine: the mesh is not marked");
   RefineLimits l = limits;
   l.max_cells = std::min<std::size_t>(l.max_cells, kNoCell - 1);
   return dispatch(mesh.dim, [&]<int D>() { return refine_dim<D>(mesh, selected, l); });
@@ -376,7 +403,8 @@ RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected, const Refin
 
 RefineResult refine_uniform(Mesh &mesh) {
   std::vector<CellId> all(mesh.num_cells());
-  for (std::size_t c = 0; c < all.size(); ++c) all[c] = CellId(c);
+  for (std::size_t c = 0; c < all.size(); ++c)
+    all[c] = CellId(c);
   return refine(mesh, all);
 }
 

@@ -8,9 +8,9 @@
 #include "bisect/output.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -42,8 +42,8 @@ void check_readable_file(const std::string &path) {
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
   if (ec || !fs::exists(st))
-    throw InputError(path, "cannot open: " +
-                               (ec ? ec.message() : std::string(std::strerror(ENOENT))));
+    throw InputError(path,
+                     "cannot open: " + (ec ? ec.message() : std::string(std::strerror(ENOENT))));
   if (fs::is_directory(st))
     throw InputError(path, "is a directory");
   if (!fs::is_regular_file(st))
@@ -80,10 +80,12 @@ namespace {
 // array then stays (refinement interpolates it, the writers put it back),
 // unless every z is 0. Anything less flat is a surface in 3D.
 void settle_plane(Mesh &mesh, const std::string &path, Format format) {
-  if (mesh.dim != 2) return;
+  if (mesh.dim != 2)
+    return;
   auto it = std::find_if(mesh.point_data.begin(), mesh.point_data.end(),
                          [](const DataArray &a) { return a.name == kPlaneZArray; });
-  if (it == mesh.point_data.end() || it->values.empty()) return;
+  if (it == mesh.point_data.end() || it->values.empty())
+    return;
   double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
     const double x[3] = {mesh.point(VertexId(v))[0], mesh.point(VertexId(v))[1], it->values[v]};
@@ -95,15 +97,19 @@ void settle_plane(Mesh &mesh, const std::string &path, Format format) {
   const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], std::abs(lo[2]), std::abs(hi[2])});
   if (hi[2] - lo[2] > 1e-12 * extent) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "the triangles are not in one plane z = c (z goes from %.17g to %.17g)",
-                  lo[2], hi[2]);
-    std::string what = std::string(buf) + "; bisect refines planar triangle meshes, tetrahedra and 4D meshes";
+    std::snprintf(buf, sizeof buf,
+                  "the triangles are not in one plane z = c (z goes from %.17g to %.17g)", lo[2],
+                  hi[2]);
+    std::string what =
+        std::string(buf) + "; bisect refines planar triangle meshes, tetrahedra and 4D meshes";
     if (format == Format::Msh)
-      what += " (if these triangles bound a volume, its tetrahedra are missing: is a Physical Volume "
-              "missing in the .geo?)";
+      what +=
+          " (if these triangles bound a volume, its tetrahedra are missing: is a Physical Volume "
+          "missing in the .geo?)";
     throw InputError(path, what);
   }
-  if (lo[2] == 0 && hi[2] == 0) mesh.point_data.erase(it);
+  if (lo[2] == 0 && hi[2] == 0)
+    mesh.point_data.erase(it);
 }
 
 } // namespace
@@ -117,9 +123,12 @@ Mesh read_mesh(const std::string &path) {
 }
 
 static Format format_named(const std::string &name, const std::string &format) {
-  if (format.empty()) return format_of(name);
-  if (format == "vtu") return Format::Vtu;
-  if (format == "msh") return Format::Msh;
+  if (format.empty())
+    return format_of(name);
+  if (format == "vtu")
+    return Format::Vtu;
+  if (format == "msh")
+    return Format::Msh;
   throw InputError(name, "unknown format '" + format + "' (expected vtu or msh)");
 }
 

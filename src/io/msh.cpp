@@ -1080,7 +1080,8 @@ Mesh assemble(Source &src, MshFile &f) {
     DataArray z{kPlaneZArray, 1, {}};
     z.values.reserve(nv);
     for (std::size_t p = 0; p < vertex_of.size(); ++p)
-      if (vertex_of[p] != kNoVertex) z.values.push_back(f.nodes.xyz[3 * p + 2]);
+      if (vertex_of[p] != kNoVertex)
+        z.values.push_back(f.nodes.xyz[3 * p + 2]);
     m.point_data.push_back(std::move(z));
   }
   m.cells.reserve(s.nodes.size());
@@ -1099,9 +1100,11 @@ Mesh assemble(Source &src, MshFile &f) {
   std::vector<std::uint32_t> by_tag;
   by_tag.reserve(s.size());
   for (const ElementRef &e : f.elements)
-    if (e.dim == dim && e.index != kNoIndex) by_tag.push_back(e.index);
+    if (e.dim == dim && e.index != kNoIndex)
+      by_tag.push_back(e.index);
   bool identity = true;
-  for (std::size_t i = 0; i < by_tag.size() && identity; ++i) identity = by_tag[i] == i;
+  for (std::size_t i = 0; i < by_tag.size() && identity; ++i)
+    identity = by_tag[i] == i;
   if (!identity && by_tag.size() == s.size()) {
     const std::size_t nvc = std::size_t(dim + 1);
     std::vector<VertexId> cells(m.cells.size());
@@ -1291,14 +1294,16 @@ EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const DataAr
   }
   // Counting sort of the cells by entity.
   std::vector<std::size_t> count(plan.entities.size(), 0);
-  for (std::size_t c = 0; c < nc; ++c) ++count[entity_of_cell[c]];
+  for (std::size_t c = 0; c < nc; ++c)
+    ++count[entity_of_cell[c]];
   std::vector<std::size_t> next;
   for (std::size_t e = 0, first = 0; e < plan.entities.size(); first += count[e], ++e) {
     plan.blocks.push_back({e, first, count[e]});
     next.push_back(first);
   }
   plan.order.resize(nc);
-  for (std::size_t c = 0; c < nc; ++c) plan.order[next[entity_of_cell[c]]++] = c;
+  for (std::size_t c = 0; c < nc; ++c)
+    plan.order[next[entity_of_cell[c]]++] = c;
   return plan;
 }
 
@@ -1322,9 +1327,11 @@ void write_entities(Output &out, int dim, const EntityPlan &plan) {
 
 // A 2D mesh's z (kPlaneZArray), which goes into the nodes; null if none.
 const DataArray *plane_z_of(const Mesh &mesh) {
-  if (mesh.dim != 2) return nullptr;
+  if (mesh.dim != 2)
+    return nullptr;
   for (const DataArray &a : mesh.point_data)
-    if (a.name == kPlaneZArray && a.components == 1) return &a;
+    if (a.name == kPlaneZArray && a.components == 1)
+      return &a;
   return nullptr;
 }
 
@@ -1346,7 +1353,8 @@ void write_nodes(Output &out, const Mesh &mesh, long long entity) {
     for (std::size_t v = 0; v < nv; ++v)
       for (int i = 0; i < 3; ++i)
         out.raw<double>(i < mesh.dim ? mesh.point(VertexId(v))[i]
-                                     : plane_z ? plane_z->values[v] : 0.0);
+                        : plane_z    ? plane_z->values[v]
+                                     : 0.0);
   }
   out.text("\n$EndNodes\n");
 }

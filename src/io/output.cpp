@@ -9,10 +9,10 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <fcntl.h>
 #include <filesystem>
 #include <string_view>
 #include <sys/stat.h>
-#include <fcntl.h>
 #include <unistd.h>
 
 namespace bisect {
@@ -29,13 +29,15 @@ std::atomic<bool> g_committed{false};
 int take_slot(const char *path) {
   for (std::size_t i = 0; i < kSlots; ++i) {
     const char *expected = nullptr;
-    if (g_pending[i].compare_exchange_strong(expected, path)) return int(i);
+    if (g_pending[i].compare_exchange_strong(expected, path))
+      return int(i);
   }
   return -1;
 }
 
 void release_slot(int slot) {
-  if (slot < 0) return;
+  if (slot < 0)
+    return;
   const char *p = g_pending[std::size_t(slot)].exchange(nullptr);
   delete[] p;
 }
@@ -51,10 +53,12 @@ std::string follow_links(const std::string &path) {
   fs::path p(path);
   for (int depth = 0; depth < 40; ++depth) {
     struct stat st;
-    if (::lstat(p.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return p.string();
+    if (::lstat(p.c_str(), &st) != 0 || !S_ISLNK(st.st_mode))
+      return p.string();
     std::error_code ec;
     fs::path to = fs::read_symlink(p, ec);
-    if (ec) throw InputError(path, "cannot follow the symbolic link: " + ec.message());
+    if (ec)
+      throw InputError(path, "cannot follow the symbolic link: " + ec.message());
     p = to.is_absolute() ? to : p.parent_path() / to;
   }
   throw InputError(path, "too many levels of symbolic links");
@@ -65,8 +69,10 @@ std::string follow_links(const std::string &path) {
 bool same_file(const std::string &a, const std::string &b) {
   struct stat sa, sb;
   const bool ea = ::stat(a.c_str(), &sa) == 0, eb = ::stat(b.c_str(), &sb) == 0;
-  if (ea && eb) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
-  if (ea != eb) return false;
+  if (ea && eb)
+    return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  if (ea != eb)
+    return false;
   std::error_code e1, e2;
   const fs::path ca = fs::weakly_canonical(a, e1), cb = fs::weakly_canonical(b, e2);
   return !e1 && !e2 && ca == cb;
@@ -80,7 +86,8 @@ std::string temporary_name(const std::string &target, unsigned counter) {
   const std::string tail = tail_buf;
   std::string base = p.filename().string();
   const std::size_t room = NAME_MAX - 1 - tail.size();
-  if (base.size() > room) base.resize(room);
+  if (base.size() > room)
+    base.resize(room);
   std::string name(1, '.');
   name += base;
   name += tail;
@@ -90,32 +97,40 @@ std::string temporary_name(const std::string &target, unsigned counter) {
 } // namespace
 
 std::string write_failure(int err) {
-  if (err == 0) return "I/O error";
+  if (err == 0)
+    return "I/O error";
   std::string s = std::strerror(err);
-  if (!s.empty()) s[0] = char(std::tolower(static_cast<unsigned char>(s[0])));
+  if (!s.empty())
+    s[0] = char(std::tolower(static_cast<unsigned char>(s[0])));
   return s;
 }
 
 void remove_pending_outputs() noexcept {
-  if (g_committed.load()) return;
+  if (g_committed.load())
+    return;
   for (std::size_t i = 0; i < kSlots; ++i)
-    if (const char *p = g_pending[i].load()) ::unlink(p);
+    if (const char *p = g_pending[i].load())
+      ::unlink(p);
 }
 
-bool outputs_committed() noexcept { return g_committed.load(); }
+bool outputs_committed() noexcept {
+  return g_committed.load();
+}
 
 OutputSet::OutputSet(std::vector<std::string> inputs, bool force)
     : inputs_(std::move(inputs)), force_(force) {}
 
 OutputSet::~OutputSet() {
   for (Output &o : outputs_) {
-    if (!committed_ && !o.temp.empty()) ::unlink(o.temp.c_str());
+    if (!committed_ && !o.temp.empty())
+      ::unlink(o.temp.c_str());
     release_slot(o.slot);
   }
 }
 
 int OutputSet::add(const std::string &path) {
-  if (path.empty()) throw InputError(path, "empty output file name");
+  if (path.empty())
+    throw InputError(path, "empty output file name");
   Output o;
   o.name = path;
   // /dev/stdout, /dev/fd/N and the like name whatever the descriptor is (a
@@ -125,15 +140,19 @@ int OutputSet::add(const std::string &path) {
   o.target = system ? path : follow_links(path);
   struct stat st;
   const bool exists = ::stat(o.target.c_str(), &st) == 0;
-  if (system && !exists) throw InputError(path, "cannot write: " + write_failure(errno));
+  if (system && !exists)
+    throw InputError(path, "cannot write: " + write_failure(errno));
   for (const std::string &in : inputs_)
     if (!in.empty() && same_file(in, o.target))
       throw InputError(path, "is also an input of this command (" + in +
                                  "); refusing to overwrite it, choose another output name");
   if (exists) {
-    if (S_ISDIR(st.st_mode)) throw InputError(path, "cannot write: it is a directory");
-    if (S_ISBLK(st.st_mode)) throw InputError(path, "cannot write: it is a block device");
-    if (S_ISSOCK(st.st_mode)) throw InputError(path, "cannot write: it is a socket");
+    if (S_ISDIR(st.st_mode))
+      throw InputError(path, "cannot write: it is a directory");
+    if (S_ISBLK(st.st_mode))
+      throw InputError(path, "cannot write: it is a block device");
+    if (S_ISSOCK(st.st_mode))
+      throw InputError(path, "cannot write: it is a socket");
     o.direct = system || !S_ISREG(st.st_mode); // FIFO, character device: written into
   }
   if (!o.direct) {
@@ -141,10 +160,13 @@ int OutputSet::add(const std::string &path) {
       throw InputError(path, "cannot write: file name too long");
     for (const Output &other : outputs_)
       if (!other.direct && same_file(other.target, o.target))
-        throw InputError(path, "is also the output " + other.name + "; give each output its own name");
-    if (exists && !force_) throw InputError(path, "already exists (use --force to overwrite)");
+        throw InputError(path,
+                         "is also the output " + other.name + "; give each output its own name");
+    if (exists && !force_)
+      throw InputError(path, "already exists (use --force to overwrite)");
     fs::path dir = fs::path(o.target).parent_path();
-    if (dir.empty()) dir = ".";
+    if (dir.empty())
+      dir = ".";
     std::error_code ec;
     if (!fs::is_directory(dir, ec))
       throw InputError(path, "cannot write: directory " + dir.string() + " does not exist");
@@ -159,8 +181,10 @@ int OutputSet::add(const std::string &path) {
 
 const std::string &OutputSet::file(int handle) {
   Output &o = outputs_.at(std::size_t(handle));
-  if (o.direct) return o.target;
-  if (!o.temp.empty()) return o.temp;
+  if (o.direct)
+    return o.target;
+  if (!o.temp.empty())
+    return o.temp;
   struct stat st;
   const bool replaces = ::stat(o.target.c_str(), &st) == 0;
   static std::atomic<unsigned> counter{0};
@@ -168,7 +192,8 @@ const std::string &OutputSet::file(int handle) {
     std::string temp = temporary_name(o.target, counter++);
     const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd < 0) {
-      if (errno == EEXIST) continue;
+      if (errno == EEXIST)
+        continue;
       throw InputError(o.name, "cannot write: " + write_failure(errno));
     }
     char *registered = copy_c_string(temp);
@@ -179,7 +204,8 @@ const std::string &OutputSet::file(int handle) {
       ::unlink(temp.c_str());
       throw InputError(o.name, "cannot write: too many output files");
     }
-    if (replaces) (void)::fchmod(fd, st.st_mode & 07777); // keep the replaced file's mode
+    if (replaces)
+      (void)::fchmod(fd, st.st_mode & 07777); // keep the replaced file's mode
     ::close(fd);
     o.temp = std::move(temp);
     return o.temp;
@@ -196,11 +222,13 @@ void OutputSet::commit() {
   ::sigprocmask(SIG_BLOCK, &block, &old);
   std::string failure;
   for (Output &o : outputs_) {
-    if (o.direct || o.temp.empty()) continue;
+    if (o.direct || o.temp.empty())
+      continue;
     // After a failed rename (which nothing short of a vanished directory
     // causes) the rest are not renamed either.
     if (!failure.empty() || ::rename(o.temp.c_str(), o.target.c_str()) != 0) {
-      if (failure.empty()) failure = o.name + ": cannot write: " + write_failure(errno);
+      if (failure.empty())
+        failure = o.name + ": cannot write: " + write_failure(errno);
       ::unlink(o.temp.c_str());
     }
     o.temp.clear();
@@ -210,7 +238,8 @@ void OutputSet::commit() {
   committed_ = true;
   g_committed = true;
   ::sigprocmask(SIG_SETMASK, &old, nullptr);
-  if (!failure.empty()) throw InputError("", failure);
+  if (!failure.empty())
+    throw InputError("", failure);
 }
 
 } // namespace bisect

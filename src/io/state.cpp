@@ -14,14 +14,17 @@ namespace {
 
 int find_array(const std::vector<DataArray> &arrays, const char *name) {
   for (std::size_t i = 0; i < arrays.size(); ++i)
-    if (arrays[i].name == name) return int(i);
+    if (arrays[i].name == name)
+      return int(i);
   return -1;
 }
 
 void set_array(std::vector<DataArray> &arrays, DataArray a) {
   int i = find_array(arrays, a.name.c_str());
-  if (i >= 0) arrays[i] = std::move(a);
-  else arrays.push_back(std::move(a));
+  if (i >= 0)
+    arrays[i] = std::move(a);
+  else
+    arrays.push_back(std::move(a));
 }
 
 } // namespace
@@ -32,9 +35,11 @@ int permutation_rank(const int *p, int k) {
   int rank = 0;
   for (int i = 0; i < k; ++i) {
     int smaller = 0;
-    for (int j = i + 1; j < k; ++j) smaller += p[j] < p[i];
+    for (int j = i + 1; j < k; ++j)
+      smaller += p[j] < p[i];
     int f = 1;
-    for (int m = 2; m < k - i; ++m) f *= m;
+    for (int m = 2; m < k - i; ++m)
+      f *= m;
     rank += smaller * f;
   }
   return rank;
@@ -42,8 +47,10 @@ int permutation_rank(const int *p, int k) {
 
 bool permutation_of_rank(int rank, int k, int *p) {
   int f = 1;
-  for (int m = 2; m <= k; ++m) f *= m;
-  if (rank < 0 || rank >= f) return false;
+  for (int m = 2; m <= k; ++m)
+    f *= m;
+  if (rank < 0 || rank >= f)
+    return false;
   bool used[5] = {};
   for (int i = 0; i < k; ++i) {
     f /= (k - i);
@@ -71,7 +78,8 @@ void encode_state(Mesh &mesh) {
     cell_points(mesh, CellId(c), pts);
     VertexId *x = mesh.cell(CellId(c));
     const bool flip = signed_volume(pts, n) < 0;
-    if (flip) std::swap(x[0], x[1]);
+    if (flip)
+      std::swap(x[0], x[1]);
     if (mesh.marked())
       state.values[c] = double(pack_state(flip ? swapped_rank : 0, mesh.stage[c], mesh.tag[c]));
   }
@@ -88,7 +96,8 @@ void encode_state(Mesh &mesh) {
         for (int i = 0, k = 0; i < nv; ++i)
           for (int j = i + 1; j < nv; ++j, ++k) {
             auto it = mesh.edge_rank.find(edge_key(x[i], x[j]));
-            if (it != mesh.edge_rank.end()) rank.values[c * ne + k] = it->second;
+            if (it != mesh.edge_rank.end())
+              rank.values[c * ne + k] = it->second;
           }
       }
       set_array(mesh.cell_data, std::move(rank));
@@ -102,7 +111,8 @@ void strip_state(Mesh &mesh) {
   if (state >= 0) {
     const DataArray &a = mesh.cell_data[std::size_t(state)];
     for (std::size_t c = 0; c < mesh.num_cells(); ++c)
-      if (int(a.values[c]) >> 4 != 0) std::swap(mesh.cell(CellId(c))[0], mesh.cell(CellId(c))[1]);
+      if (int(a.values[c]) >> 4 != 0)
+        std::swap(mesh.cell(CellId(c))[0], mesh.cell(CellId(c))[1]);
   }
   std::erase_if(mesh.cell_data, [](const DataArray &a) {
     return a.name == kStateArray || a.name == kOrderArray || a.name == kStageArray ||
@@ -155,18 +165,19 @@ bool decode_state(Mesh &mesh, const std::string &path) {
   if (mesh.marking == Marking::Explicit) {
     const int ne = nv * n / 2;
     if (ir < 0 || mesh.cell_data[ir].components != ne)
-      throw InputError(path, std::string("explicit marking needs the cell array ") + kEdgeRankArray +
-                                 " with " + std::to_string(ne) + " components");
+      throw InputError(path, std::string("explicit marking needs the cell array ") +
+                                 kEdgeRankArray + " with " + std::to_string(ne) + " components");
     const DataArray &rank = mesh.cell_data[ir];
     for (std::size_t c = 0; c < nc; ++c) {
       const VertexId *x = mesh.cell(CellId(c)); // stored connectivity, as encoded
       for (int i = 0, k = 0; i < nv; ++i)
         for (int j = i + 1; j < nv; ++j, ++k) {
           double r = rank.values[c * ne + k];
-          if (r == -1) continue;
+          if (r == -1)
+            continue;
           if (!(r >= 0 && r < 4294967295.0 && r == std::floor(r)))
-            throw InputError(path, "cell " + std::to_string(c) + ": " + kEdgeRankArray +
-                                       " holds " + std::to_string(r) + ", not a rank");
+            throw InputError(path, "cell " + std::to_string(c) + ": " + kEdgeRankArray + " holds " +
+                                       std::to_string(r) + ", not a rank");
           auto [it, fresh] = mesh.edge_rank.emplace(edge_key(x[i], x[j]), std::uint32_t(r));
           if (!fresh && it->second != std::uint32_t(r))
             throw InputError(path, "cell " + std::to_string(c) + ": " + kEdgeRankArray +
@@ -179,15 +190,17 @@ bool decode_state(Mesh &mesh, const std::string &path) {
   mesh.tag.resize(nc);
   for (std::size_t c = 0; c < nc; ++c) {
     auto bad = [&](const std::string &what) {
-      return InputError(path, "cell " + std::to_string(c) + ": invalid bisection state (" +
-                                  what + ")");
+      return InputError(path,
+                        "cell " + std::to_string(c) + ": invalid bisection state (" + what + ")");
     };
-    if (marking.values[c] != m0) throw bad("mixed " + std::string(kMarkingArray));
+    if (marking.values[c] != m0)
+      throw bad("mixed " + std::string(kMarkingArray));
     double s, t;
     int perm[5];
     if (packed) {
       const double v = packed->values[c];
-      if (!(v >= 0 && v < 4096 && v == std::floor(v))) throw bad(std::string(kStateArray) + " out of range");
+      if (!(v >= 0 && v < 4096 && v == std::floor(v)))
+        throw bad(std::string(kStateArray) + " out of range");
       const int w = int(v);
       s = (w >> 3) & 1;
       t = w & 7;
@@ -206,10 +219,12 @@ bool decode_state(Mesh &mesh, const std::string &path) {
       }
     }
     if (s == 1) {
-      if (!(t >= 1 && t <= n && t == std::floor(t))) throw bad("Maubach tag out of range");
+      if (!(t >= 1 && t <= n && t == std::floor(t)))
+        throw bad("Maubach tag out of range");
       mesh.stage[c] = Stage::Maubach;
     } else if (s == 0) {
-      if (!(t >= 0 && t <= n - 3 && t == std::floor(t))) throw bad("Stage 1 tag (generation) out of range");
+      if (!(t >= 0 && t <= n - 3 && t == std::floor(t)))
+        throw bad("Stage 1 tag (generation) out of range");
       mesh.stage[c] = Stage::Opposite;
     } else {
       throw bad("stage must be 0 or 1");
@@ -217,14 +232,16 @@ bool decode_state(Mesh &mesh, const std::string &path) {
     mesh.tag[c] = std::uint8_t(t);
     VertexId conn[5], *x = mesh.cell(CellId(c));
     std::copy(x, x + nv, conn);
-    for (int i = 0; i < nv; ++i) x[i] = conn[perm[i]];
+    for (int i = 0; i < nv; ++i)
+      x[i] = conn[perm[i]];
   }
   if (std::string why = check_state_consistency(mesh); !why.empty())
     throw InputError(path, "the bisection state is inconsistent (" + why +
                                "): the file was not written by bisect as it is, or was altered "
                                "(cell order, connectivity or bisect:* arrays)");
   for (int i : {io, is, it, im, ir, ip})
-    if (i >= 0) mesh.cell_data[i].name.clear();
+    if (i >= 0)
+      mesh.cell_data[i].name.clear();
   std::erase_if(mesh.cell_data, [](const DataArray &a) { return a.name.empty(); });
   decode_tree(mesh, path);
   return true;

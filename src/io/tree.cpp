@@ -14,13 +14,16 @@ namespace {
 
 DataArray *find(std::vector<DataArray> &arrays, const char *name) {
   for (DataArray &a : arrays)
-    if (a.name == name) return &a;
+    if (a.name == name)
+      return &a;
   return nullptr;
 }
 
 void put(std::vector<DataArray> &arrays, DataArray a) {
-  if (DataArray *old = find(arrays, a.name.c_str())) *old = std::move(a);
-  else arrays.push_back(std::move(a));
+  if (DataArray *old = find(arrays, a.name.c_str()))
+    *old = std::move(a);
+  else
+    arrays.push_back(std::move(a));
 }
 
 bool is_tree_array(const DataArray &a) {
@@ -28,11 +31,11 @@ bool is_tree_array(const DataArray &a) {
 }
 
 // The array's values as integers in [lo, hi]; InputError naming the entity.
-void check_integers(const DataArray &a, std::size_t count, double lo, double hi,
-                    const char *entity, const std::string &path) {
+void check_integers(const DataArray &a, std::size_t count, double lo, double hi, const char *entity,
+                    const std::string &path) {
   if (a.components != 1)
-    throw InputError(path, a.name + " has " + std::to_string(a.components) +
-                               " components; expected 1");
+    throw InputError(path,
+                     a.name + " has " + std::to_string(a.components) + " components; expected 1");
   if (a.values.size() != count)
     throw InputError(path, a.name + " has " + std::to_string(a.values.size()) + " values for " +
                                std::to_string(count) + " " + entity + "s");
@@ -41,7 +44,8 @@ void check_integers(const DataArray &a, std::size_t count, double lo, double hi,
     if (!(v >= lo && v <= hi && v == std::floor(v)))
       throw InputError(path, std::string(entity) + " " + std::to_string(i) + ": " + a.name +
                                  " holds " + std::to_string(v) + ", not an integer in " +
-                                 std::to_string(static_cast<long long>(lo)) + ".." + std::to_string(static_cast<long long>(hi)));
+                                 std::to_string(static_cast<long long>(lo)) + ".." +
+                                 std::to_string(static_cast<long long>(hi)));
   }
 }
 
@@ -54,8 +58,10 @@ void encode_tree(Mesh &mesh) {
   }
   const std::size_t nc = mesh.num_cells(), nv = mesh.num_vertices();
   DataArray generation{kGenerationArray, 1, std::vector<double>(nc)};
-  for (std::size_t c = 0; c < nc; ++c) generation.values[c] = mesh.generation[c];
-  DataArray a{kParentAArray, 1, std::vector<double>(nv)}, b{kParentBArray, 1, std::vector<double>(nv)};
+  for (std::size_t c = 0; c < nc; ++c)
+    generation.values[c] = mesh.generation[c];
+  DataArray a{kParentAArray, 1, std::vector<double>(nv)},
+      b{kParentBArray, 1, std::vector<double>(nv)};
   for (std::size_t v = 0; v < nv; ++v) {
     const VertexId p = mesh.parent_edge[2 * v], q = mesh.parent_edge[2 * v + 1];
     a.values[v] = p == kNoVertex ? -1.0 : double(p);
@@ -75,9 +81,11 @@ void strip_tree(Mesh &mesh) {
 
 bool decode_tree(Mesh &mesh, const std::string &path) {
   const DataArray *generation = find(mesh.cell_data, kGenerationArray);
-  const DataArray *pa = find(mesh.point_data, kParentAArray), *pb = find(mesh.point_data, kParentBArray);
+  const DataArray *pa = find(mesh.point_data, kParentAArray),
+                  *pb = find(mesh.point_data, kParentBArray);
   mesh.clear_tree();
-  if (!generation && !pa && !pb) return false;
+  if (!generation && !pa && !pb)
+    return false;
   if (!pa != !pb)
     throw InputError(path, std::string("point arrays ") + kParentAArray + " and " + kParentBArray +
                                " come together; only " + (pa ? kParentAArray : kParentBArray) +
@@ -86,7 +94,8 @@ bool decode_tree(Mesh &mesh, const std::string &path) {
   std::vector<std::uint16_t> gen(nc, 0);
   if (generation) {
     check_integers(*generation, nc, 0, std::numeric_limits<std::uint16_t>::max(), "cell", path);
-    for (std::size_t c = 0; c < nc; ++c) gen[c] = std::uint16_t(generation->values[c]);
+    for (std::size_t c = 0; c < nc; ++c)
+      gen[c] = std::uint16_t(generation->values[c]);
   }
   std::vector<VertexId> parents(2 * nv, kNoVertex);
   if (pa) {
@@ -97,21 +106,27 @@ bool decode_tree(Mesh &mesh, const std::string &path) {
       const double a = pa->values[v], b = pb->values[v];
       auto bad = [&](const std::string &what) {
         return InputError(path, "vertex " + std::to_string(v) + ": " + kParentAArray + " " +
-                                    std::to_string(static_cast<long long>(a)) + ", " + kParentBArray + " " +
+                                    std::to_string(static_cast<long long>(a)) + ", " +
+                                    kParentBArray + " " +
                                     std::to_string(static_cast<long long>(b)) + ": " + what);
       };
-      if (a == -1 && b == -1) continue;
-      if (a == -1 || b == -1) throw bad("either both are -1 (an original vertex) or neither");
-      if (a == b) throw bad("the two ends of an edge must differ");
+      if (a == -1 && b == -1)
+        continue;
+      if (a == -1 || b == -1)
+        throw bad("either both are -1 (an original vertex) or neither");
+      if (a == b)
+        throw bad("the two ends of an edge must differ");
       if (!(a < double(v) && b < double(v)))
         throw bad("a vertex made by bisection has a larger id than both ends of its edge");
-      const double *p = mesh.point(VertexId(a)), *q = mesh.point(VertexId(b)), *z = mesh.point(VertexId(v));
+      const double *p = mesh.point(VertexId(a)), *q = mesh.point(VertexId(b)),
+                   *z = mesh.point(VertexId(v));
       double extent = 0, off = 0;
       for (int k = 0; k < mesh.dim; ++k) {
         extent = std::max(extent, std::abs(p[k] - q[k]));
         off = std::max(off, std::abs(z[k] - 0.5 * (p[k] + q[k])));
       }
-      if (!(off <= 1e-6 * extent)) throw bad("the vertex is not the midpoint of that edge");
+      if (!(off <= 1e-6 * extent))
+        throw bad("the vertex is not the midpoint of that edge");
       parents[2 * v] = VertexId(a);
       parents[2 * v + 1] = VertexId(b);
     }

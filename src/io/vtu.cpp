@@ -41,14 +41,14 @@ constexpr int kPolyVertex = 2, kTriangle = 5, kTetra = 10, kConvexPointSet = 41;
 
 const CellKind *linear_cell(int type) {
   static const CellKind kinds[] = {
-      {"empty cell", -1, 0, false},      {"vertex", 0, 1, false},
-      {"poly-vertex", 0, 1, true},       {"line", 1, 2, false},
-      {"poly-line", 1, 2, true},         {"triangle", 2, 3, false},
-      {"triangle strip", 2, 3, true},    {"polygon", 2, 3, true},
-      {"pixel", 2, 4, false},            {"quad", 2, 4, false},
-      {"tetrahedron", 3, 4, false},      {"voxel", 3, 8, false},
-      {"hexahedron", 3, 8, false},       {"wedge", 3, 6, false},
-      {"pyramid", 3, 5, false},          {"pentagonal prism", 3, 10, false},
+      {"empty cell", -1, 0, false},     {"vertex", 0, 1, false},
+      {"poly-vertex", 0, 1, true},      {"line", 1, 2, false},
+      {"poly-line", 1, 2, true},        {"triangle", 2, 3, false},
+      {"triangle strip", 2, 3, true},   {"polygon", 2, 3, true},
+      {"pixel", 2, 4, false},           {"quad", 2, 4, false},
+      {"tetrahedron", 3, 4, false},     {"voxel", 3, 8, false},
+      {"hexahedron", 3, 8, false},      {"wedge", 3, 6, false},
+      {"pyramid", 3, 5, false},         {"pentagonal prism", 3, 10, false},
       {"hexagonal prism", 3, 12, false}};
   static const CellKind convex_point_set = {"convex point set", 3, 1, true};
   static const CellKind polyhedron = {"polyhedron", 3, 4, true};
@@ -142,7 +142,8 @@ KeptCells select_cells(const std::string &path, const vtu::Grid &g) {
     for (std::size_t c = 0; c < g.num_cells; ++c)
       if (linear_cell(g.types[c])->dim >= 2)
         throw InputError(path, "no triangles or tetrahedra (found non-simplex cells, VTK "
-                               "type " + std::to_string(g.types[c]) + ")");
+                               "type " +
+                                   std::to_string(g.types[c]) + ")");
     throw InputError(path, "no triangles or tetrahedra");
   }
   const int simplex = dim == 2 ? kTriangle : kTetra;
@@ -160,12 +161,14 @@ KeptCells select_cells(const std::string &path, const vtu::Grid &g) {
 
 ValueType value_type_named(const std::string &t) {
   static const std::pair<const char *, ValueType> names[] = {
-      {"Float32", ValueType::Float32}, {"Float64", ValueType::Float64}, {"Int8", ValueType::Int8},
-      {"UInt8", ValueType::UInt8},     {"Int16", ValueType::Int16},     {"UInt16", ValueType::UInt16},
-      {"Int32", ValueType::Int32},     {"UInt32", ValueType::UInt32},   {"Int64", ValueType::Int64},
-      {"UInt64", ValueType::UInt64}};
+      {"Float32", ValueType::Float32}, {"Float64", ValueType::Float64},
+      {"Int8", ValueType::Int8},       {"UInt8", ValueType::UInt8},
+      {"Int16", ValueType::Int16},     {"UInt16", ValueType::UInt16},
+      {"Int32", ValueType::Int32},     {"UInt32", ValueType::UInt32},
+      {"Int64", ValueType::Int64},     {"UInt64", ValueType::UInt64}};
   for (const auto &[n, v] : names)
-    if (t == n) return v;
+    if (t == n)
+      return v;
   return ValueType::Unknown;
 }
 
@@ -195,7 +198,8 @@ DataArray take_rows(vtu::Array &a, const std::string &name, const std::vector<Ro
 const vtu::Array &time_array(const std::string &path, const vtu::Grid &g) {
   const vtu::Array *t = find_array(g.point_data, "t");
   if (!t || !t->numeric)
-    throw InputError(path, "4D mesh: point data array 't' (4th coordinate) is missing or not numeric");
+    throw InputError(path,
+                     "4D mesh: point data array 't' (4th coordinate) is missing or not numeric");
   if (t->components != 1)
     throw InputError(path, "4D mesh: point data array 't' has " + std::to_string(t->components) +
                                " components, expected 1");
@@ -270,10 +274,11 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
   }
   if (move_points)
     mesh.coords = std::move(g.points); // x, y, z of every point, in order
-  if (off_plane) { // see settle_plane in io.cpp
+  if (off_plane) {                     // see settle_plane in io.cpp
     DataArray z{kPlaneZArray, 1, {}};
     z.values.reserve(used.size());
-    for (VertexId p : used) z.values.push_back(g.points[3 * p + 2]);
+    for (VertexId p : used)
+      z.values.push_back(g.points[3 * p + 2]);
     mesh.point_data.push_back(std::move(z));
   }
 

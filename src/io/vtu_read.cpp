@@ -48,9 +48,12 @@
 namespace bisect::vtu {
 namespace {
 
-static_assert(std::endian::native == std::endian::little || std::endian::native == std::endian::big);
+static_assert(std::endian::native == std::endian::little ||
+              std::endian::native == std::endian::big);
 
-std::string str(std::uint64_t v) { return std::to_string(v); }
+std::string str(std::uint64_t v) {
+  return std::to_string(v);
+}
 
 // A token of the file quoted for a message: at most 24 characters, no
 // control characters (the message stays one line).
@@ -61,7 +64,9 @@ std::string quoted(std::string_view t) {
   return out + (t.size() > 24 ? "...'" : "'");
 }
 
-bool is_space(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
+bool is_space(char c) {
+  return c == ' ' || c == '\n' || c == '\r' || c == '\t';
+}
 
 // ---------------------------------------------------------------------------
 // The XML subset: elements, attributes (quoted with ' or ", the predefined
@@ -90,7 +95,7 @@ struct Element {
 };
 
 struct Document {
-  std::vector<Element> elements; // [0] is the root
+  std::vector<Element> elements;        // [0] is the root
   const char *appended_begin = nullptr; // just after the '_'; null without AppendedData
   const char *appended_end = nullptr;
   bool appended_base64 = false;
@@ -204,11 +209,16 @@ private:
       if (semi == std::string_view::npos)
         fail(at, "'&' without ';' in an attribute value");
       const std::string_view ent = raw.substr(k + 1, semi - k - 1);
-      if (ent == "lt") out += '<';
-      else if (ent == "gt") out += '>';
-      else if (ent == "amp") out += '&';
-      else if (ent == "quot") out += '"';
-      else if (ent == "apos") out += '\'';
+      if (ent == "lt")
+        out += '<';
+      else if (ent == "gt")
+        out += '>';
+      else if (ent == "amp")
+        out += '&';
+      else if (ent == "quot")
+        out += '"';
+      else if (ent == "apos")
+        out += '\'';
       else if (ent.size() > 1 && ent[0] == '#') {
         const bool hex = ent[1] == 'x';
         unsigned code = 0;
@@ -355,18 +365,27 @@ constexpr std::array<ScalarInfo, 10> kScalars = {{
     {"Float64", Scalar::Float64, 8, false},
 }};
 
-const ScalarInfo &info(Scalar t) { return kScalars[std::size_t(t)]; }
+const ScalarInfo &info(Scalar t) {
+  return kScalars[std::size_t(t)];
+}
 
 // The range of an integer type, as int64 (UInt64's top is checked apart).
 std::pair<std::int64_t, std::int64_t> int_range(Scalar t) {
   switch (t) {
-  case Scalar::Int8: return {INT8_MIN, INT8_MAX};
-  case Scalar::UInt8: return {0, UINT8_MAX};
-  case Scalar::Int16: return {INT16_MIN, INT16_MAX};
-  case Scalar::UInt16: return {0, UINT16_MAX};
-  case Scalar::Int32: return {INT32_MIN, INT32_MAX};
-  case Scalar::UInt32: return {0, UINT32_MAX};
-  default: return {INT64_MIN, INT64_MAX};
+  case Scalar::Int8:
+    return {INT8_MIN, INT8_MAX};
+  case Scalar::UInt8:
+    return {0, UINT8_MAX};
+  case Scalar::Int16:
+    return {INT16_MIN, INT16_MAX};
+  case Scalar::UInt16:
+    return {0, UINT16_MAX};
+  case Scalar::Int32:
+    return {INT32_MIN, INT32_MAX};
+  case Scalar::UInt32:
+    return {0, UINT32_MAX};
+  default:
+    return {INT64_MIN, INT64_MAX};
   }
 }
 
@@ -377,10 +396,14 @@ enum class Compressor { None, Zlib, Lz4, Lzma };
 // corrupt and is refused before any allocation.
 std::uint64_t max_expansion(Compressor c) {
   switch (c) {
-  case Compressor::Zlib: return 1100;
-  case Compressor::Lz4: return 260;
-  case Compressor::Lzma: return 8192;
-  default: return 1;
+  case Compressor::Zlib:
+    return 1100;
+  case Compressor::Lz4:
+    return 260;
+  case Compressor::Lzma:
+    return 8192;
+  default:
+    return 1;
   }
 }
 
@@ -396,7 +419,7 @@ struct ArraySpec {
   Scalar type = Scalar::Float64;
   int components = 1;
   Format format = Format::Ascii;
-  std::uint64_t offset = 0; // appended
+  std::uint64_t offset = 0;            // appended
   std::optional<std::uint64_t> tuples; // NumberOfTuples, when given
   const Element *element = nullptr;
 };
@@ -412,9 +435,12 @@ constexpr std::array<signed char, 256> make_base64_table() {
   std::array<signed char, 256> t{};
   for (auto &v : t)
     v = kBad;
-  for (int c = 'A'; c <= 'Z'; ++c) t[c] = static_cast<signed char>(c - 'A');
-  for (int c = 'a'; c <= 'z'; ++c) t[c] = static_cast<signed char>(c - 'a' + 26);
-  for (int c = '0'; c <= '9'; ++c) t[c] = static_cast<signed char>(c - '0' + 52);
+  for (int c = 'A'; c <= 'Z'; ++c)
+    t[c] = static_cast<signed char>(c - 'A');
+  for (int c = 'a'; c <= 'z'; ++c)
+    t[c] = static_cast<signed char>(c - 'a' + 26);
+  for (int c = '0'; c <= '9'; ++c)
+    t[c] = static_cast<signed char>(c - '0' + 52);
   t['+'] = 62;
   t['/'] = 63;
   t['='] = kPad;
@@ -504,8 +530,8 @@ private:
 // Reading one array.
 
 struct FileFormat {
-  bool swap = false;      // byte_order differs from this machine's
-  int header_bytes = 4;   // header_type UInt32 or UInt64
+  bool swap = false;    // byte_order differs from this machine's
+  int header_bytes = 4; // header_type UInt32 or UInt64
   Compressor compressor = Compressor::None;
 };
 
@@ -604,10 +630,13 @@ void decompress_block(ByteSource &src, Compressor c, const unsigned char *in, st
       src.fail("zlib " + which + " holds more than the " + str(out_size) +
                " bytes its header says");
     if (rc != Z_OK)
-      src.fail("zlib " + which + " is corrupt (" + (rc == Z_DATA_ERROR ? "data error" : rc == Z_BUF_ERROR ? "incomplete data" : "zlib error " + std::to_string(rc)) + ")");
+      src.fail("zlib " + which + " is corrupt (" +
+               (rc == Z_DATA_ERROR  ? "data error"
+                : rc == Z_BUF_ERROR ? "incomplete data"
+                                    : "zlib error " + std::to_string(rc)) +
+               ")");
     if (got != out_size)
-      src.fail("zlib " + which + " holds " + str(got) + " bytes, its header says " +
-               str(out_size));
+      src.fail("zlib " + which + " holds " + str(got) + " bytes, its header says " + str(out_size));
     return;
   }
   case Compressor::Lz4: {
@@ -638,7 +667,8 @@ void decompress_block(ByteSource &src, Compressor c, const unsigned char *in, st
                str(out_size));
     return;
   }
-  default: src.fail("internal: no compressor");
+  default:
+    src.fail("internal: no compressor");
   }
 }
 
@@ -695,8 +725,8 @@ public:
   // Hands the decoded bytes to put(bytes, n) in order, a block (or a
   // chunk of base64) at a time: the buffers stay small and are reused, as
   // fresh memory costs a page fault per page.
-  template <class Put> void fill(Put &&put, std::vector<unsigned char> &in_buf,
-                                 std::vector<unsigned char> &out_buf) {
+  template <class Put>
+  void fill(Put &&put, std::vector<unsigned char> &in_buf, std::vector<unsigned char> &out_buf) {
     if (f_.compressor == Compressor::None) {
       constexpr std::uint64_t kChunk = 3 << 16;
       for (std::uint64_t done = 0; done < size_;) {
@@ -732,8 +762,7 @@ private:
 // int64 (offsets), uint32 (point ids: at most kBadId, see BadIds), uint8
 // (cell types: a type past 255 is an error here).
 template <class D, class V>
-D narrow(V v, std::uint64_t index, const std::string &label, const std::string &path,
-         BadIds *bad) {
+D narrow(V v, std::uint64_t index, const std::string &label, const std::string &path, BadIds *bad) {
   if constexpr (std::is_same_v<D, double>) {
     return static_cast<double>(v);
   } else if constexpr (std::is_same_v<D, std::int64_t>) {
@@ -757,8 +786,8 @@ D narrow(V v, std::uint64_t index, const std::string &label, const std::string &
     if constexpr (std::is_signed_v<V>)
       ok = v >= 0 && v <= 255;
     if (!ok)
-      throw InputError(path, label + ": cell " + str(index) + " has VTK type " +
-                                 std::to_string(v) + ", which is not a known linear cell type");
+      throw InputError(path, label + ": cell " + str(index) + " has VTK type " + std::to_string(v) +
+                                 ", which is not a known linear cell type");
     return static_cast<std::uint8_t>(v);
   }
 }
@@ -785,22 +814,30 @@ void convert_from(const unsigned char *src, std::size_t n, bool swap, D *out, st
     }
   }
   for (std::size_t i = 0; i < n; ++i)
-    out[i] = narrow<D>(load<S>(src + i * sizeof(S), swap), first + i, f.label(), f.path(),
-                       f.bad_ids());
+    out[i] =
+        narrow<D>(load<S>(src + i * sizeof(S), swap), first + i, f.label(), f.path(), f.bad_ids());
 }
 
 template <class D>
 void convert(Scalar t, const unsigned char *src, std::size_t n, bool swap, D *out,
              std::size_t first, const ByteSource &f) {
   switch (t) {
-  case Scalar::Int8: return convert_from<D, std::int8_t>(src, n, swap, out, first, f);
-  case Scalar::UInt8: return convert_from<D, std::uint8_t>(src, n, swap, out, first, f);
-  case Scalar::Int16: return convert_from<D, std::int16_t>(src, n, swap, out, first, f);
-  case Scalar::UInt16: return convert_from<D, std::uint16_t>(src, n, swap, out, first, f);
-  case Scalar::Int32: return convert_from<D, std::int32_t>(src, n, swap, out, first, f);
-  case Scalar::UInt32: return convert_from<D, std::uint32_t>(src, n, swap, out, first, f);
-  case Scalar::Int64: return convert_from<D, std::int64_t>(src, n, swap, out, first, f);
-  case Scalar::UInt64: return convert_from<D, std::uint64_t>(src, n, swap, out, first, f);
+  case Scalar::Int8:
+    return convert_from<D, std::int8_t>(src, n, swap, out, first, f);
+  case Scalar::UInt8:
+    return convert_from<D, std::uint8_t>(src, n, swap, out, first, f);
+  case Scalar::Int16:
+    return convert_from<D, std::int16_t>(src, n, swap, out, first, f);
+  case Scalar::UInt16:
+    return convert_from<D, std::uint16_t>(src, n, swap, out, first, f);
+  case Scalar::Int32:
+    return convert_from<D, std::int32_t>(src, n, swap, out, first, f);
+  case Scalar::UInt32:
+    return convert_from<D, std::uint32_t>(src, n, swap, out, first, f);
+  case Scalar::Int64:
+    return convert_from<D, std::int64_t>(src, n, swap, out, first, f);
+  case Scalar::UInt64:
+    return convert_from<D, std::uint64_t>(src, n, swap, out, first, f);
   case Scalar::Float32:
     if constexpr (std::is_same_v<D, double>)
       return convert_from<D, float>(src, n, swap, out, first, f);
@@ -852,7 +889,9 @@ private:
 template <class D>
 std::vector<D> parse_ascii(const std::string &path, const ArraySpec &a, std::uint64_t expected,
                            BadIds *bad_ids) {
-  auto fail = [&](const std::string &what) -> void { throw InputError(path, a.label + ": " + what); };
+  auto fail = [&](const std::string &what) -> void {
+    throw InputError(path, a.label + ": " + what);
+  };
   std::size_t chars = 0;
   for (auto t : a.element->text)
     chars += t.size();
@@ -984,8 +1023,9 @@ public:
       }
     }
     if (out.size() % std::size_t(a.components))
-      throw InputError(path_, a.label + " has " + str(out.size()) + " values, not a multiple of its " +
-                                  std::to_string(a.components) + " components");
+      throw InputError(path_, a.label + " has " + str(out.size()) +
+                                  " values, not a multiple of its " + std::to_string(a.components) +
+                                  " components");
     return out;
   }
 
@@ -1032,8 +1072,8 @@ std::uint64_t parse_count(const std::string &path, const Element &e, const char 
   std::uint64_t n = 0;
   const auto r = std::from_chars(v->data() + b, v->data() + end, n);
   if (b == end || r.ec != std::errc() || r.ptr != v->data() + end)
-    throw InputError(path, where + ": " + attr + " " + quoted(*v) +
-                               " is not a non-negative integer");
+    throw InputError(path,
+                     where + ": " + attr + " " + quoted(*v) + " is not a non-negative integer");
   return n;
 }
 
@@ -1166,8 +1206,9 @@ private:
       if (e.name != "DataArray")
         continue;
       const std::string *n = e.attribute("Name");
-      const std::string label = piece + what + " array " +
-                                (n && !n->empty() ? quoted(*n) : std::to_string(out.size()) + " (unnamed)");
+      const std::string label =
+          piece + what + " array " +
+          (n && !n->empty() ? quoted(*n) : std::to_string(out.size()) + " (unnamed)");
       out.push_back(spec(e, label));
       // Two arrays of one name would be one array in VTK (the later replaces
       // the earlier): refused as ambiguous.
@@ -1271,12 +1312,18 @@ private:
       const ArraySpec *sc = nullptr, *so = nullptr, *st = nullptr;
       const std::vector<ArraySpec> cs = specs(*cells, "Cells", at);
       for (const ArraySpec &a : cs) {
-        if (a.name == "connectivity") sc = &a;
-        else if (a.name == "offsets") so = &a;
-        else if (a.name == "types") st = &a;
+        if (a.name == "connectivity")
+          sc = &a;
+        else if (a.name == "offsets")
+          so = &a;
+        else if (a.name == "types")
+          st = &a;
       }
       if (nc > 0 && (!sc || !so || !st))
-        fail(at + "<Cells> has no '" + (!sc ? "connectivity" : !so ? "offsets" : "types") +
+        fail(at + "<Cells> has no '" +
+             (!sc   ? "connectivity"
+              : !so ? "offsets"
+                    : "types") +
              "' array");
       if (st)
         types = arrays_.read<std::uint8_t>(*st, nc);
@@ -1327,8 +1374,8 @@ private:
   // Offsets end each cell: non-decreasing, within the connectivity, the last
   // at its end; every point id within the piece.
   void check_cells(const std::string &at, std::size_t first_cell, std::uint64_t np,
-                   const std::vector<std::uint32_t> &conn,
-                   const std::vector<std::int64_t> &offsets, const BadIds &bad) const {
+                   const std::vector<std::uint32_t> &conn, const std::vector<std::int64_t> &offsets,
+                   const BadIds &bad) const {
     std::int64_t start = 0;
     const auto size = std::int64_t(conn.size());
     for (std::size_t c = 0; c < offsets.size(); ++c) {
@@ -1392,7 +1439,8 @@ public:
     }
     std::size_t done = 0;
     while (done < size) {
-      const ssize_t n = ::read(fd, bytes_.data() + done, std::min<std::size_t>(size - done, 1u << 30));
+      const ssize_t n =
+          ::read(fd, bytes_.data() + done, std::min<std::size_t>(size - done, 1u << 30));
       if (n < 0 && errno == EINTR)
         continue;
       if (n <= 0) {

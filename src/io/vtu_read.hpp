@@ -28,7 +28,7 @@ struct Array {
 struct Grid {
   std::size_t num_points = 0;
   std::size_t num_cells = 0;
-  std::vector<double> points;             // x, y, z per point
+  std::vector<double> points;              // x, y, z per point
   std::vector<std::uint32_t> connectivity; // point ids (< num_points) of all cells
   std::vector<std::int64_t> offsets;       // num_cells + 1 entries from 0: cell c uses
                                            // connectivity[offsets[c], offsets[c + 1])

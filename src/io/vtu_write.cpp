@@ -35,18 +35,21 @@ constexpr std::size_t kBlock = 32768; // VTK's default block size
 class Writer {
 public:
   explicit Writer(const std::string &path) : path_(path), file_(std::fopen(path.c_str(), "wb")) {
-    if (!file_) throw InputError(path, "cannot write: " + write_failure(errno));
+    if (!file_)
+      throw InputError(path, "cannot write: " + write_failure(errno));
     buf_.reserve(kBuffer + 8);
   }
   ~Writer() {
-    if (file_) std::fclose(file_);
+    if (file_)
+      std::fclose(file_);
   }
   Writer(const Writer &) = delete;
   Writer &operator=(const Writer &) = delete;
 
   void text(const std::string &s) {
     buf_.append(s);
-    if (buf_.size() >= kBuffer) flush();
+    if (buf_.size() >= kBuffer)
+      flush();
   }
 
   // base64 of `n` bytes, continuing the current base64 stream.
@@ -62,7 +65,8 @@ public:
         continue;
       }
       const std::size_t whole = n / 3 * 3;
-      for (std::size_t i = 0; i < whole; i += 3) encode3(p + i);
+      for (std::size_t i = 0; i < whole; i += 3)
+        encode3(p + i);
       p += whole;
       n -= whole;
     }
@@ -87,10 +91,13 @@ public:
 
   void close() {
     flush();
-    if (std::fflush(file_) != 0 && !error_) error_ = errno ? errno : EIO;
-    if (std::fclose(file_) != 0 && !error_) error_ = errno ? errno : EIO;
+    if (std::fflush(file_) != 0 && !error_)
+      error_ = errno ? errno : EIO;
+    if (std::fclose(file_) != 0 && !error_)
+      error_ = errno ? errno : EIO;
     file_ = nullptr;
-    if (error_) throw InputError(path_, "cannot write: " + write_failure(error_));
+    if (error_)
+      throw InputError(path_, "cannot write: " + write_failure(error_));
   }
 
 private:
@@ -102,7 +109,8 @@ private:
     const char out[4] = {kDigits[v >> 18 & 63], kDigits[v >> 12 & 63], kDigits[v >> 6 & 63],
                          kDigits[v & 63]};
     buf_.append(out, 4);
-    if (buf_.size() >= kBuffer) flush();
+    if (buf_.size() >= kBuffer)
+      flush();
   }
   void flush() {
     if (!buf_.empty() && std::fwrite(buf_.data(), 1, buf_.size(), file_) != buf_.size() && !error_)
@@ -122,35 +130,68 @@ std::string xml_escaped(const std::string &s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-    case '&': out += "&amp;"; break;
-    case '<': out += "&lt;"; break;
-    case '>': out += "&gt;"; break;
-    case '"': out += "&quot;"; break;
-    case '\'': out += "&apos;"; break;
-    default: out += c;
+    case '&':
+      out += "&amp;";
+      break;
+    case '<':
+      out += "&lt;";
+      break;
+    case '>':
+      out += "&gt;";
+      break;
+    case '"':
+      out += "&quot;";
+      break;
+    case '\'':
+      out += "&apos;";
+      break;
+    default:
+      out += c;
     }
   }
   return out;
 }
 
 template <class T> const char *type_name();
-template <> const char *type_name<double>() { return "Float64"; }
-template <> const char *type_name<std::int32_t>() { return "Int32"; }
-template <> const char *type_name<std::int64_t>() { return "Int64"; }
-template <> const char *type_name<std::uint8_t>() { return "UInt8"; }
-template <> const char *type_name<std::int8_t>() { return "Int8"; }
-template <> const char *type_name<std::int16_t>() { return "Int16"; }
-template <> const char *type_name<std::uint16_t>() { return "UInt16"; }
-template <> const char *type_name<std::uint32_t>() { return "UInt32"; }
-template <> const char *type_name<std::uint64_t>() { return "UInt64"; }
-template <> const char *type_name<float>() { return "Float32"; }
+template <> const char *type_name<double>() {
+  return "Float64";
+}
+template <> const char *type_name<std::int32_t>() {
+  return "Int32";
+}
+template <> const char *type_name<std::int64_t>() {
+  return "Int64";
+}
+template <> const char *type_name<std::uint8_t>() {
+  return "UInt8";
+}
+template <> const char *type_name<std::int8_t>() {
+  return "Int8";
+}
+template <> const char *type_name<std::int16_t>() {
+  return "Int16";
+}
+template <> const char *type_name<std::uint16_t>() {
+  return "UInt16";
+}
+template <> const char *type_name<std::uint32_t>() {
+  return "UInt32";
+}
+template <> const char *type_name<std::uint64_t>() {
+  return "UInt64";
+}
+template <> const char *type_name<float>() {
+  return "Float32";
+}
 
 // Writes one DataArray element: `count` values of T, value(i) for the i-th.
 template <class T, class Value>
 void write_array(Writer &w, VtuCompression compression, int level, const std::string &name,
                  int components, std::size_t count, Value value, const char *extra = "") {
   w.text("        <DataArray type=\"" + std::string(type_name<T>()) + "\" Name=\"" +
-         xml_escaped(name) + "\"" + (components > 1 ? " NumberOfComponents=\"" + std::to_string(components) + "\"" : std::string()) +
+         xml_escaped(name) + "\"" +
+         (components > 1 ? " NumberOfComponents=\"" + std::to_string(components) + "\""
+                         : std::string()) +
          extra + " format=\"binary\">\n          ");
   const std::size_t bytes = count * sizeof(T);
   const std::size_t per_block = kBlock / sizeof(T);
@@ -159,7 +200,8 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
   auto fill = [&](std::size_t first) {
     raw.clear();
     const std::size_t last = std::min(count, first + per_block);
-    for (std::size_t i = first; i < last; ++i) raw.push_back(value(i));
+    for (std::size_t i = first; i < last; ++i)
+      raw.push_back(value(i));
   };
   if (compression == VtuCompression::None) {
     const std::uint64_t header = bytes;
@@ -171,7 +213,8 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
     w.end_base64();
   } else {
     const std::size_t blocks = (bytes + kBlock - 1) / kBlock;
-    std::vector<std::uint64_t> header{blocks, kBlock, bytes % kBlock ? bytes % kBlock : (blocks ? kBlock : 0)};
+    std::vector<std::uint64_t> header{blocks, kBlock,
+                                      bytes % kBlock ? bytes % kBlock : (blocks ? kBlock : 0)};
     std::vector<unsigned char> packed;
     std::vector<unsigned char> tmp;
     for (std::size_t first = 0; first < count; first += per_block) {
@@ -190,13 +233,15 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
         tmp.resize(std::size_t(room));
         const int got = LZ4_compress_default(reinterpret_cast<const char *>(src),
                                              reinterpret_cast<char *>(tmp.data()), int(n), room);
-        if (got <= 0) throw CheckError("LZ4 failed to compress array '" + name + "'");
+        if (got <= 0)
+          throw CheckError("LZ4 failed to compress array '" + name + "'");
         out = std::size_t(got);
       }
       header.push_back(out);
       packed.insert(packed.end(), tmp.begin(), tmp.begin() + std::ptrdiff_t(out));
     }
-    w.base64(reinterpret_cast<const unsigned char *>(header.data()), header.size() * sizeof(std::uint64_t));
+    w.base64(reinterpret_cast<const unsigned char *>(header.data()),
+             header.size() * sizeof(std::uint64_t));
     w.end_base64();
     w.base64(packed.data(), packed.size());
     w.end_base64();
@@ -223,19 +268,31 @@ void write_typed(Writer &w, VtuCompression compression, int level, const DataArr
                    [&](std::size_t i) { return static_cast<T>(a.values[i]); });
   };
   switch (a.type) {
-  case ValueType::Float32: return put(float{});
-  case ValueType::Float64: return put(double{});
-  case ValueType::Int8: return put(std::int8_t{});
-  case ValueType::UInt8: return put(std::uint8_t{});
-  case ValueType::Int16: return put(std::int16_t{});
-  case ValueType::UInt16: return put(std::uint16_t{});
-  case ValueType::Int32: return put(std::int32_t{});
-  case ValueType::UInt32: return put(std::uint32_t{});
-  case ValueType::Int64: return put(std::int64_t{});
-  case ValueType::UInt64: return put(std::uint64_t{});
-  case ValueType::Unknown: break;
+  case ValueType::Float32:
+    return put(float{});
+  case ValueType::Float64:
+    return put(double{});
+  case ValueType::Int8:
+    return put(std::int8_t{});
+  case ValueType::UInt8:
+    return put(std::uint8_t{});
+  case ValueType::Int16:
+    return put(std::int16_t{});
+  case ValueType::UInt16:
+    return put(std::uint16_t{});
+  case ValueType::Int32:
+    return put(std::int32_t{});
+  case ValueType::UInt32:
+    return put(std::uint32_t{});
+  case ValueType::Int64:
+    return put(std::int64_t{});
+  case ValueType::UInt64:
+    return put(std::uint64_t{});
+  case ValueType::Unknown:
+    break;
   }
-  if (guess_int && fits_int32(a.values)) return put(std::int32_t{});
+  if (guess_int && fits_int32(a.values))
+    return put(std::int32_t{});
   put(double{});
 }
 
@@ -248,13 +305,16 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
   Writer w(path);
   w.text("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
          "byte_order=\"LittleEndian\" header_type=\"UInt64\"");
-  if (compression == VtuCompression::Zlib) w.text(" compressor=\"vtkZLibDataCompressor\"");
-  if (compression == VtuCompression::Lz4) w.text(" compressor=\"vtkLZ4DataCompressor\"");
+  if (compression == VtuCompression::Zlib)
+    w.text(" compressor=\"vtkZLibDataCompressor\"");
+  if (compression == VtuCompression::Lz4)
+    w.text(" compressor=\"vtkLZ4DataCompressor\"");
   w.text(">\n  <UnstructuredGrid>\n");
   if (dim == 4) {
     w.text("    <FieldData>\n");
-    write_array<std::int32_t>(w, compression, level, "SpatialDimension", 1, 1,
-                              [](std::size_t) { return std::int32_t(4); }, " NumberOfTuples=\"1\"");
+    write_array<std::int32_t>(
+        w, compression, level, "SpatialDimension", 1, 1,
+        [](std::size_t) { return std::int32_t(4); }, " NumberOfTuples=\"1\"");
     w.text("    </FieldData>\n");
   }
   w.text("    <Piece NumberOfPoints=\"" + std::to_string(nv) + "\" NumberOfCells=\"" +
@@ -272,20 +332,24 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
     write_array<double>(w, compression, level, "t", 1, nv,
                         [&](std::size_t v) { return mesh.coords[v * 4 + 3]; });
   w.text("      </PointData>\n      <CellData>\n");
-  for (const DataArray &a : mesh.cell_data) write_typed(w, compression, level, a, true);
+  for (const DataArray &a : mesh.cell_data)
+    write_typed(w, compression, level, a, true);
   w.text("      </CellData>\n      <Points>\n");
   write_array<double>(w, compression, level, "Points", 3, 3 * nv, [&](std::size_t i) {
     const std::size_t v = i / 3, k = i % 3;
-    if (int(k) < dim) return mesh.coords[v * std::size_t(dim) + k];
+    if (int(k) < dim)
+      return mesh.coords[v * std::size_t(dim) + k];
     return plane_z ? plane_z->values[v] : 0.0;
   });
   w.text("      </Points>\n      <Cells>\n");
   write_array<std::int64_t>(w, compression, level, "connectivity", 1, mesh.cells.size(),
                             [&](std::size_t i) { return std::int64_t(mesh.cells[i]); });
-  write_array<std::int64_t>(w, compression, level, "offsets", 1, nc,
-                            [&](std::size_t c) { return std::int64_t((c + 1) * std::size_t(nvc)); });
+  write_array<std::int64_t>(w, compression, level, "offsets", 1, nc, [&](std::size_t c) {
+    return std::int64_t((c + 1) * std::size_t(nvc));
+  });
   const std::uint8_t type = dim == 2 ? 5 : dim == 3 ? 10 : 2; // triangle, tetra, poly-vertex
-  write_array<std::uint8_t>(w, compression, level, "types", 1, nc, [&](std::size_t) { return type; });
+  write_array<std::uint8_t>(w, compression, level, "types", 1, nc,
+                            [&](std::size_t) { return type; });
   w.text("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
   w.close();
 }

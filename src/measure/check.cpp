@@ -70,7 +70,9 @@ template <int N, int K> constexpr std::array<std::array<int, K>, binomial(N, K)>
   return out;
 }
 
-template <int Dim> constexpr int opposite_of_facet(int m) { return m; }
+template <int Dim> constexpr int opposite_of_facet(int m) {
+  return m;
+}
 
 template <int K> void sort_small(std::array<VertexId, K> &a) {
   for (int i = 1; i < K; ++i)
@@ -102,7 +104,7 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
   static_assert(!SideOnly || (WithRefs && K == Dim));
   static constexpr int kRefBits = SideOnly ? 1 : WithRefs ? 32 : 0;
   static constexpr int kIdBits = SideOnly ? 31 : 32;
-  using Packed = UIntFor<kIdBits * (K - 1) + kRefBits>;
+  using Packed = UIntFor<kIdBits *(K - 1) + kRefBits>;
 
   const Mesh &mesh;
   const std::vector<std::int8_t> *signs;
@@ -146,7 +148,8 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
   template <class Visit>
   void chunk(std::size_t v0, std::size_t v1, std::vector<Packed> &buffer, Visit &&visit) const {
     const std::size_t nc = mesh.num_cells();
-    std::vector<std::size_t> cursor(start.begin() + std::ptrdiff_t(v0), start.begin() + std::ptrdiff_t(v1));
+    std::vector<std::size_t> cursor(start.begin() + std::ptrdiff_t(v0),
+                                    start.begin() + std::ptrdiff_t(v1));
     std::vector<std::uint32_t> group;
     std::array<VertexId, K> key;
     buffer.resize(start[v1] - start[v0]);
@@ -189,7 +192,8 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
           else if constexpr (WithRefs)
             group.push_back(std::uint32_t(*j));
         for (int t = K - 1; t >= 1; --t)
-          key[t] = VertexId((rest >> (kIdBits * (K - 1 - t))) & Packed(0xFFFFFFFFu >> (32 - kIdBits)));
+          key[t] =
+              VertexId((rest >> (kIdBits * (K - 1 - t))) & Packed(0xFFFFFFFFu >> (32 - kIdBits)));
         visit(std::as_const(key), WithRefs ? group.data() : nullptr, int(j - i));
         i = j;
       }
@@ -237,7 +241,6 @@ template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
 // ---- small geometry ---------------------------------------------------------
 
 using geometry::squared_distance;
-
 
 // Solves the n x n system G x = b (n <= 4) by elimination with pivoting;
 // false when G is singular.
@@ -396,7 +399,7 @@ struct FacetReport {
   std::size_t boundary_facets = 0; // owned by one cell
   double boundary_measure = 0;
   double smallest_boundary_facet = INFINITY; // measure
-  std::vector<VertexId> boundary; // Dim sorted ids per boundary facet
+  std::vector<VertexId> boundary;            // Dim sorted ids per boundary facet
   std::string
       nonmanifold; // first facet shared by 3+ cells, e.g. "facet (1, 2, 3) is shared by 3 cells"
   std::string overlap; // first folded pair, e.g. "cells 5 and 9 overlap across facet (1, 2, 3)"
@@ -452,7 +455,8 @@ template <int Dim, bool SideOnly> struct FacetVisitor {
           r.overlap = "two cells overlap across facet " + id_list(key);
         return;
       }
-      const CellId cells[2] = {CellId((refs[0] & ~kSideBit) / M), CellId((refs[1] & ~kSideBit) / M)};
+      const CellId cells[2] = {CellId((refs[0] & ~kSideBit) / M),
+                               CellId((refs[1] & ~kSideBit) / M)};
       // Degenerate cells (sign 0) are reported before this pass; skip them.
       if ((*signs)[cells[0]] == 0 || (*signs)[cells[1]] == 0)
         return;
@@ -469,11 +473,10 @@ template <int Dim, bool SideOnly = false>
 FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs,
                        bool keep_boundary) {
   FacetReport r;
-  for_each_subsimplex<Dim, Dim, true, SideOnly>(mesh, FacetVisitor<Dim, SideOnly>{mesh, signs, keep_boundary, r},
-                                                signs);
+  for_each_subsimplex<Dim, Dim, true, SideOnly>(
+      mesh, FacetVisitor<Dim, SideOnly>{mesh, signs, keep_boundary, r}, signs);
   return r;
 }
-
 
 // First cell with an id out of range, e.g. "cell 5 refers to vertex 99, but
 // there are only 12 vertices"; empty when all ids are valid.
@@ -722,24 +725,31 @@ std::string find_hanging_node(const Mesh &mesh, const std::vector<VertexId> &bnd
 // failed check.
 std::string find_duplicate_vertices(const Mesh &mesh) {
   std::vector<char> used(mesh.num_vertices(), 0);
-  for (VertexId v : mesh.cells) used[v] = 1;
+  for (VertexId v : mesh.cells)
+    used[v] = 1;
   std::vector<VertexId> order;
   for (std::size_t v = 0; v < used.size(); ++v)
-    if (used[v]) order.push_back(VertexId(v));
+    if (used[v])
+      order.push_back(VertexId(v));
   const int d = mesh.dim;
   auto less = [&](VertexId a, VertexId b) {
-    return std::lexicographical_compare(mesh.point(a), mesh.point(a) + d, mesh.point(b), mesh.point(b) + d);
+    return std::lexicographical_compare(mesh.point(a), mesh.point(a) + d, mesh.point(b),
+                                        mesh.point(b) + d);
   };
-  std::sort(order.begin(), order.end(), [&](VertexId a, VertexId b) { return less(a, b) || (!less(b, a) && a < b); });
+  std::sort(order.begin(), order.end(),
+            [&](VertexId a, VertexId b) { return less(a, b) || (!less(b, a) && a < b); });
   std::size_t pairs = 0;
   VertexId first_a = 0, first_b = 0;
   for (std::size_t i = 1; i < order.size(); ++i)
     if (std::equal(mesh.point(order[i]), mesh.point(order[i]) + d, mesh.point(order[i - 1]))) {
-      if (pairs++ == 0) first_a = order[i - 1], first_b = order[i];
+      if (pairs++ == 0)
+        first_a = order[i - 1], first_b = order[i];
     }
-  if (pairs == 0) return {};
+  if (pairs == 0)
+    return {};
   std::string at;
-  for (int k = 0; k < d; ++k) at += (k ? ", " : "") + format("%.17g", mesh.point(first_a)[k], 0, 0);
+  for (int k = 0; k < d; ++k)
+    at += (k ? ", " : "") + format("%.17g", mesh.point(first_a)[k], 0, 0);
   return "duplicate vertices: " + std::to_string(first_a) + " and " + std::to_string(first_b) +
          " are both at (" + at + ")" +
          (pairs > 1 ? " (and " + std::to_string(pairs - 1) + " more pairs)" : std::string()) +
@@ -750,7 +760,8 @@ std::string find_duplicate_vertices(const Mesh &mesh) {
 template <int Dim> std::string find_overlap(const Mesh &mesh) {
   constexpr int N = Dim + 1;
   const std::size_t nc = mesh.num_cells();
-  if (nc < 2) return {};
+  if (nc < 2)
+    return {};
   std::vector<double> centroid(nc * Dim, 0.0);
   double lo[Dim], hi[Dim], h = 0;
   std::fill(lo, lo + Dim, 1e300);
@@ -774,7 +785,8 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
     h += ext;
   }
   h /= double(nc);
-  if (!(h > 0)) return {};
+  if (!(h > 0))
+    return {};
   constexpr int kBits = 64 / Dim;
   // Grid cells of half the mean extent hold a few centroids each (a cell of
   // the mean extent held ~40 in 3D, most of them outside the box tested).
@@ -790,13 +802,15 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
   };
   auto key_of = [&](const std::int64_t *idx) {
     std::uint64_t k = 0;
-    for (int d = 0; d < Dim; ++d) k |= std::uint64_t(idx[d]) << (kBits * d);
+    for (int d = 0; d < Dim; ++d)
+      k |= std::uint64_t(idx[d]) << (kBits * d);
     return k;
   };
   std::vector<std::pair<std::uint64_t, CellId>> grid(nc);
   for (std::size_t c = 0; c < nc; ++c) {
     std::int64_t idx[Dim];
-    for (int d = 0; d < Dim; ++d) idx[d] = index(centroid[c * Dim + d], d);
+    for (int d = 0; d < Dim; ++d)
+      idx[d] = index(centroid[c * Dim + d], d);
     grid[c] = {key_of(idx), CellId(c)};
   }
   std::sort(grid.begin(), grid.end());
@@ -831,14 +845,16 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
     double cover = 1, blo[Dim], bhi[Dim];
     for (int d = 0; d < Dim; ++d) {
       double a = pts[d], b = pts[d];
-      for (int k = 1; k < N; ++k) a = std::min(a, pts[k * Dim + d]), b = std::max(b, pts[k * Dim + d]);
+      for (int k = 1; k < N; ++k)
+        a = std::min(a, pts[k * Dim + d]), b = std::max(b, pts[k * Dim + d]);
       blo[d] = a;
       bhi[d] = b;
       ilo[d] = index(a, d);
       ihi[d] = index(b, d);
       cover *= double(ihi[d] - ilo[d] + 1);
     }
-    if (cover > (4096 << Dim)) continue; // a huge cell among small ones: skipped, not worth the scan
+    if (cover > (4096 << Dim))
+      continue; // a huge cell among small ones: skipped, not worth the scan
     std::copy(ilo, ilo + Dim, idx);
     for (;;) {
       // idx[0] fills the low bits of the key, so the grid cells ilo[0]..ihi[0]
@@ -850,7 +866,8 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
       auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(first, CellId(0)));
       for (; it != grid.end() && it->first <= last; ++it) {
         const CellId o = it->second;
-        if (o == c) continue;
+        if (o == c)
+          continue;
         const double *x = &ordered[std::size_t(it - grid.begin()) * Dim];
         bool inside = true;
         for (int d = 0; d < Dim && inside; ++d) // outside the cell's box: not inside it
@@ -872,8 +889,10 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
                  std::to_string(c) + ")";
       }
       int d = 1;
-      while (d < Dim && ++idx[d] > ihi[d]) idx[d] = ilo[d], ++d;
-      if (d == Dim) break;
+      while (d < Dim && ++idx[d] > ihi[d])
+        idx[d] = ilo[d], ++d;
+      if (d == Dim)
+        break;
     }
   }
   return {};
@@ -1051,8 +1070,8 @@ public:
       std::sort(intervals_.begin(), intervals_.end());
       const double tol = 1e-6 * kTwoPi;
       for (std::size_t i = 0; i < intervals_.size(); ++i) {
-        const double next = i + 1 < intervals_.size() ? intervals_[i + 1].first
-                                                      : intervals_[0].first + kTwoPi;
+        const double next =
+            i + 1 < intervals_.size() ? intervals_[i + 1].first : intervals_[0].first + kTwoPi;
         if (intervals_[i].second > next + tol) {
           out.expected = -1; // fans overlapping
           return true;
@@ -1066,8 +1085,8 @@ private:
   // Whether the angles of a fan of cells from boundary facet F + p to F + q,
   // summing to `sum`, fill the interior angle between them: from ray p to
   // ray q, turning towards w (the other vertex of p's cell), in [0, 2π).
-  bool boundary_angle_fits(const double *f0, int nb, VertexId p, VertexId w, VertexId q,
-                           double sum, double &expected) const {
+  bool boundary_angle_fits(const double *f0, int nb, VertexId p, VertexId w, VertexId q, double sum,
+                           double &expected) const {
     constexpr double kTwoPi = 2 * M_PI;
     double up[Dim], uq[Dim], uw[Dim];
     project(f0, nb, p, up);
@@ -1208,7 +1227,6 @@ template <int Dim> std::string find_fold(const Mesh &mesh) {
   }
 }
 
-
 bool relative_change(double before, double after) {
   const double scale = std::max(std::abs(before), std::abs(after));
   return std::abs(after - before) > 1e-9 * scale;
@@ -1252,7 +1270,8 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
     double bad_volume = 0;
     std::vector<std::int8_t> signs;
     const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
-    if (bad != std::size_t(-1)) return fail(degenerate_cell(bad, bad_volume));
+    if (bad != std::size_t(-1))
+      return fail(degenerate_cell(bad, bad_volume));
     const FacetReport fr = facet_pass<D>(mesh, &signs, true);
     if (!fr.nonmanifold.empty())
       return fail(fr.nonmanifold);
@@ -1298,7 +1317,8 @@ CheckResult check_refined(const Mesh &mesh, const Invariants &original) {
     double bad_volume = 0;
     std::vector<std::int8_t> signs;
     const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
-    if (bad != std::size_t(-1)) return fail(degenerate_cell(bad, bad_volume));
+    if (bad != std::size_t(-1))
+      return fail(degenerate_cell(bad, bad_volume));
     const FacetReport fr = mesh.num_vertices() < std::size_t(kSideBit)
                                ? facet_pass<D, true>(mesh, &signs, true)
                                : facet_pass<D>(mesh, &signs, true);
@@ -1329,13 +1349,13 @@ void for_each_interior_facet(const Mesh &mesh,
   dispatch(mesh.dim, [&]<int D>() {
     constexpr int M = D + 1;
     bool going = true;
-    for_each_subsimplex<D, D>(mesh, [&](const std::array<VertexId, D> &, const std::uint32_t *refs,
-                                        int count) {
-      if (!going || count != 2)
-        return;
-      going = visit(CellId(refs[0] / M), opposite_of_facet<D>(int(refs[0] % M)),
-                    CellId(refs[1] / M), opposite_of_facet<D>(int(refs[1] % M)));
-    });
+    for_each_subsimplex<D, D>(
+        mesh, [&](const std::array<VertexId, D> &, const std::uint32_t *refs, int count) {
+          if (!going || count != 2)
+            return;
+          going = visit(CellId(refs[0] / M), opposite_of_facet<D>(int(refs[0] % M)),
+                        CellId(refs[1] / M), opposite_of_facet<D>(int(refs[1] % M)));
+        });
   });
 }
 

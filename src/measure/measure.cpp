@@ -9,11 +9,11 @@
 
 #include <algorithm>
 #include <array>
-#include <type_traits>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 namespace bisect {
 namespace {
@@ -211,8 +211,6 @@ template <int Dim> std::size_t count_similarity_classes_t(const Mesh &mesh) {
   return std::size_t(std::unique(keys.begin(), keys.end()) - keys.begin());
 }
 
-
-
 } // namespace
 
 double determinant(const double *a, int n) {
@@ -223,10 +221,14 @@ double determinant(const double *a, int n) {
     return determinant<D>(m);
   };
   switch (n) {
-  case 1: return a[0];
-  case 2: return run(std::integral_constant<int, 2>{});
-  case 3: return run(std::integral_constant<int, 3>{});
-  case 4: return run(std::integral_constant<int, 4>{});
+  case 1:
+    return a[0];
+  case 2:
+    return run(std::integral_constant<int, 2>{});
+  case 3:
+    return run(std::integral_constant<int, 3>{});
+  case 4:
+    return run(std::integral_constant<int, 4>{});
   }
   return 0;
 }

@@ -36,9 +36,9 @@
 // fixed-size stack arrays only.
 #include "bisect/region.hpp"
 
+#include "bisect/mesh.hpp"
 #include "core/geometry.hpp"
 #include "region/levelset.hpp"
-#include "bisect/mesh.hpp"
 
 #include <nlohmann/json.hpp>
 

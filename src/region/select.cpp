@@ -23,10 +23,12 @@ std::vector<CellId> select_cells(const Mesh &mesh, const Region &region) {
       }
       outside = b < lo[k] || a > hi[k];
     }
-    if (outside) continue;
+    if (outside)
+      continue;
     for (int i = 0; i < nv; ++i)
       std::copy(mesh.point(x[i]), mesh.point(x[i]) + dim, pts + i * dim);
-    if (region.touches(pts, dim)) out.push_back(CellId(c));
+    if (region.touches(pts, dim))
+      out.push_back(CellId(c));
   }
   region.filter(mesh, out); // e.g. the levelset indicator keeps a fraction
   return out;

@@ -20,11 +20,14 @@ namespace bisect {
 namespace {
 
 void check_slices(const std::vector<double> &slices) {
-  if (slices.size() < 2) throw InputError("", "extrude: need at least 2 time slices");
+  if (slices.size() < 2)
+    throw InputError("", "extrude: need at least 2 time slices");
   for (std::size_t i = 0; i < slices.size(); ++i) {
-    if (!std::isfinite(slices[i])) throw InputError("", "extrude: time slice " + std::to_string(i) + " is not finite");
+    if (!std::isfinite(slices[i]))
+      throw InputError("", "extrude: time slice " + std::to_string(i) + " is not finite");
     if (i > 0 && !(slices[i] > slices[i - 1]))
-      throw InputError("", "extrude: time slices must be strictly ascending (slice " + std::to_string(i) + ")");
+      throw InputError("", "extrude: time slices must be strictly ascending (slice " +
+                               std::to_string(i) + ")");
   }
 }
 
@@ -36,7 +39,8 @@ double shortest_edge(const Mesh &m) {
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j) {
         double s = 0;
-        for (int k = 0; k < 3; ++k) s += std::pow(m.point(x[i])[k] - m.point(x[j])[k], 2);
+        for (int k = 0; k < 3; ++k)
+          s += std::pow(m.point(x[i])[k] - m.point(x[j])[k], 2);
         h2 = std::min(h2, s);
       }
   }
@@ -57,34 +61,42 @@ std::vector<VertexId> lower_hull(std::vector<double> &lifted, int npoints, int d
     facetT *facet;
     vertexT *vertex, **vertexp;
     FORALLfacets {
-      if (!(facet->normal[d] < -1e-12) || qh_setsize(qh, facet->vertices) != d + 1) continue;
+      if (!(facet->normal[d] < -1e-12) || qh_setsize(qh, facet->vertices) != d + 1)
+        continue;
       FOREACHvertex_(facet->vertices) cells.push_back(VertexId(qh_pointid(qh, vertex->point)));
     }
   }
   qh_freeqhull(qh, !qh_ALL);
   int curlong = 0, totlong = 0;
   qh_memfreeshort(qh, &curlong, &totlong);
-  if (code != 0) throw CheckError("delaunay: qhull failed with code " + std::to_string(code));
+  if (code != 0)
+    throw CheckError("delaunay: qhull failed with code " + std::to_string(code));
   return cells;
 }
 
 } // namespace
 
 Mesh delaunay(int dim, std::vector<double> coords, double spacing) {
-  if (dim < 2 || dim > 4) throw InputError("", "delaunay: dimension must be 2, 3 or 4");
+  if (dim < 2 || dim > 4)
+    throw InputError("", "delaunay: dimension must be 2, 3 or 4");
   Mesh out;
   out.dim = dim;
   out.coords = std::move(coords);
   const std::size_t n = out.num_vertices();
-  if (n < std::size_t(dim + 1)) throw InputError("", "delaunay: too few points");
+  if (n < std::size_t(dim + 1))
+    throw InputError("", "delaunay: too few points");
   std::vector<double> lo(dim), hi(dim);
-  for (int k = 0; k < dim; ++k) lo[k] = hi[k] = out.coords[k];
+  for (int k = 0; k < dim; ++k)
+    lo[k] = hi[k] = out.coords[k];
   for (std::size_t v = 0; v < n; ++v)
     for (int k = 0; k < dim; ++k)
-      lo[k] = std::min(lo[k], out.coords[dim * v + k]), hi[k] = std::max(hi[k], out.coords[dim * v + k]);
+      lo[k] = std::min(lo[k], out.coords[dim * v + k]),
+      hi[k] = std::max(hi[k], out.coords[dim * v + k]);
   double scale = 0;
-  for (int k = 0; k < dim; ++k) scale = std::max(scale, hi[k] - lo[k]);
-  if (!(spacing > 1e-9 * scale)) throw InputError("", "delaunay: points too close together");
+  for (int k = 0; k < dim; ++k)
+    scale = std::max(scale, hi[k] - lo[k]);
+  if (!(spacing > 1e-9 * scale))
+    throw InputError("", "delaunay: points too close together");
 
   // Normalize to a unit box around the origin, then lift to the paraboloid
   // |p|^2 plus a tiny deterministic offset: the offset breaks cospherical
@@ -112,11 +124,15 @@ Mesh delaunay(int dim, std::vector<double> coords, double spacing) {
   for (std::size_t c = 0; c < tuples.size() / nv; ++c) {
     VertexId *x = tuples.data() + nv * c;
     double pts[20];
-    for (int i = 0; i < nv; ++i) std::copy(out.point(x[i]), out.point(x[i]) + dim, pts + dim * i);
+    for (int i = 0; i < nv; ++i)
+      std::copy(out.point(x[i]), out.point(x[i]) + dim, pts + dim * i);
     double vol = signed_volume(pts, dim);
-    if (std::abs(vol) <= flat) continue;
-    if (vol < 0) std::swap(x[0], x[1]);
-    for (int i = 0; i < nv; ++i) used[x[i]] = 1;
+    if (std::abs(vol) <= flat)
+      continue;
+    if (vol < 0)
+      std::swap(x[0], x[1]);
+    for (int i = 0; i < nv; ++i)
+      used[x[i]] = 1;
     out.cells.insert(out.cells.end(), x, x + nv);
   }
   if (std::count(used.begin(), used.end(), 0) != 0)
@@ -125,8 +141,10 @@ Mesh delaunay(int dim, std::vector<double> coords, double spacing) {
 }
 
 Mesh extrude_delaunay(const Mesh &mesh3, const std::vector<double> &slices, bool fill_hull) {
-  if (mesh3.dim != 3) throw InputError("", "extrude: the input mesh must be 3D");
-  if (mesh3.num_cells() == 0) throw InputError("", "extrude: the input mesh has no cells");
+  if (mesh3.dim != 3)
+    throw InputError("", "extrude: the input mesh must be 3D");
+  if (mesh3.num_cells() == 0)
+    throw InputError("", "extrude: the input mesh has no cells");
   check_slices(slices);
   const std::size_t nv = mesh3.num_vertices(), ns = slices.size();
   std::vector<double> coords;
@@ -137,7 +155,8 @@ Mesh extrude_delaunay(const Mesh &mesh3, const std::vector<double> &slices, bool
       coords.push_back(t);
     }
   double gap = shortest_edge(mesh3);
-  for (std::size_t s = 1; s < ns; ++s) gap = std::min(gap, slices[s] - slices[s - 1]);
+  for (std::size_t s = 1; s < ns; ++s)
+    gap = std::min(gap, slices[s] - slices[s - 1]);
   Mesh out;
   try {
     out = delaunay(4, std::move(coords), gap);
@@ -146,7 +165,8 @@ Mesh extrude_delaunay(const Mesh &mesh3, const std::vector<double> &slices, bool
   }
   for (const DataArray &a : mesh3.point_data) {
     DataArray b{a.name, a.components, {}};
-    for (std::size_t s = 0; s < ns; ++s) b.values.insert(b.values.end(), a.values.begin(), a.values.end());
+    for (std::size_t s = 0; s < ns; ++s)
+      b.values.insert(b.values.end(), a.values.begin(), a.values.end());
     out.point_data.push_back(std::move(b));
   }
 
@@ -166,9 +186,10 @@ Mesh extrude_delaunay(const Mesh &mesh3, const std::vector<double> &slices, bool
   }
   const double expected = vol3 * (slices.back() - slices.front());
   if (!fill_hull && std::abs(total - expected) > 1e-9 * expected)
-    throw InputError("", "domain is not convex: Delaunay extrusion needs a convex 3D mesh (hull volume " +
-                             std::to_string(total) + ", prism volume " + std::to_string(expected) +
-                             "; --hull triangulates the convex hull instead)");
+    throw InputError(
+        "", "domain is not convex: Delaunay extrusion needs a convex 3D mesh (hull volume " +
+                std::to_string(total) + ", prism volume " + std::to_string(expected) +
+                "; --hull triangulates the convex hull instead)");
   return out;
 }
 
@@ -177,8 +198,10 @@ Mesh extrude_coloured(const Mesh &mesh, const std::vector<std::uint8_t> &colour,
                       const std::vector<double> &slices) {
   const int n = mesh.dim, N = n + 1, m = n + 1; // m: the output dimension
   if (n != 2 && n != 3)
-    throw InputError("", "extrude by colouring needs a 2D or 3D mesh, this one is " + std::to_string(n) + "D");
-  if (mesh.num_cells() == 0) throw InputError("", "extrude: the input mesh has no cells");
+    throw InputError("", "extrude by colouring needs a 2D or 3D mesh, this one is " +
+                             std::to_string(n) + "D");
+  if (mesh.num_cells() == 0)
+    throw InputError("", "extrude: the input mesh has no cells");
   check_slices(slices);
   if (std::string why = check_colouring(mesh, colour); !why.empty())
     throw InputError("", "the colouring is not proper: " + why);
@@ -193,12 +216,14 @@ Mesh extrude_coloured(const Mesh &mesh, const std::vector<std::uint8_t> &colour,
     }
   for (const DataArray &a : mesh.point_data) {
     DataArray b{a.name, a.components, {}};
-    for (std::size_t s = 0; s < ns; ++s) b.values.insert(b.values.end(), a.values.begin(), a.values.end());
+    for (std::size_t s = 0; s < ns; ++s)
+      b.values.insert(b.values.end(), a.values.begin(), a.values.end());
     out.point_data.push_back(std::move(b));
   }
   DataArray slice{"slice", 1, {}};
   slice.values.reserve(nv * ns);
-  for (std::size_t s = 0; s < ns; ++s) slice.values.insert(slice.values.end(), nv, double(s));
+  for (std::size_t s = 0; s < ns; ++s)
+    slice.values.insert(slice.values.end(), nv, double(s));
   out.point_data.push_back(std::move(slice));
 
   const std::size_t per_prism = std::size_t(N), ncells = nc * (ns - 1) * per_prism;
@@ -209,7 +234,8 @@ Mesh extrude_coloured(const Mesh &mesh, const std::vector<std::uint8_t> &colour,
     for (std::size_t c = 0; c < nc; ++c) {
       const VertexId *x = mesh.cell(CellId(c));
       VertexId by_colour[4];
-      for (int i = 0; i < N; ++i) by_colour[colour[x[i]]] = x[i];
+      for (int i = 0; i < N; ++i)
+        by_colour[colour[x[i]]] = x[i];
       // (x_n, ..., x_0, x'_n, ..., x'_0)
       VertexId seq[8];
       for (int k = 0; k < N; ++k) {
@@ -222,7 +248,8 @@ Mesh extrude_coloured(const Mesh &mesh, const std::vector<std::uint8_t> &colour,
       }
     }
   for (const DataArray &a : mesh.cell_data) {
-    if (a.name.rfind("bisect:", 0) == 0) continue;
+    if (a.name.rfind("bisect:", 0) == 0)
+      continue;
     DataArray b{a.name, a.components, {}};
     b.values.reserve(ncells * a.components);
     for (std::size_t c : source)

@@ -48,11 +48,16 @@ using Key = std::uint64_t; // (smaller id << 32) | larger id
 using Tet = std::array<Key, 4>;
 
 Key point_key(VertexId a, VertexId b) {
-  if (b < a) std::swap(a, b);
+  if (b < a)
+    std::swap(a, b);
   return (Key(a) << 32) | Key(b);
 }
-VertexId key_first(Key k) { return VertexId(k >> 32); }
-VertexId key_second(Key k) { return VertexId(k & 0xffffffffu); }
+VertexId key_first(Key k) {
+  return VertexId(k >> 32);
+}
+VertexId key_second(Key k) {
+  return VertexId(k & 0xffffffffu);
+}
 
 // One cell (pentatope or tet): its global ids and the side of each vertex.
 struct Pentatope {
@@ -65,7 +70,8 @@ struct Pentatope {
 bool crosses(const Pentatope &p, unsigned mask) {
   bool neg = false, pos = false;
   for (int i = 0; i < p.n; ++i)
-    if (mask >> i & 1u) neg |= p.side[i] < 0, pos |= p.side[i] > 0;
+    if (mask >> i & 1u)
+      neg |= p.side[i]<0, pos |= p.side[i]> 0;
   return neg && pos;
 }
 
@@ -75,10 +81,13 @@ bool crosses(const Pentatope &p, unsigned mask) {
 std::vector<Key> section_points(const Pentatope &p, unsigned mask) {
   std::vector<Key> out;
   for (int i = 0; i < p.n; ++i) {
-    if (!(mask >> i & 1u)) continue;
-    if (p.side[i] == 0) out.push_back(point_key(p.ids[i], p.ids[i]));
+    if (!(mask >> i & 1u))
+      continue;
+    if (p.side[i] == 0)
+      out.push_back(point_key(p.ids[i], p.ids[i]));
     for (int j = i + 1; j < p.n; ++j)
-      if ((mask >> j & 1u) && p.side[i] * p.side[j] < 0) out.push_back(point_key(p.ids[i], p.ids[j]));
+      if ((mask >> j & 1u) && p.side[i] * p.side[j] < 0)
+        out.push_back(point_key(p.ids[i], p.ids[j]));
   }
   return out;
 }
@@ -86,7 +95,8 @@ std::vector<Key> section_points(const Pentatope &p, unsigned mask) {
 // Dimension of the section of face `mask`: one less than the face when the
 // plane crosses it, else that of the face spanned by its on-plane vertices.
 int section_dim(const Pentatope &p, unsigned mask) {
-  if (crosses(p, mask)) return std::popcount(mask) - 2;
+  if (crosses(p, mask))
+    return std::popcount(mask) - 2;
   int zeros = 0;
   for (int i = 0; i < p.n; ++i)
     zeros += (mask >> i & 1u) && p.side[i] == 0;
@@ -97,18 +107,23 @@ int section_dim(const Pentatope &p, unsigned mask) {
 // k-simplices (k+1 keys each).
 std::vector<std::vector<Key>> pulling(const Pentatope &p, unsigned mask, int k) {
   std::vector<Key> pts = section_points(p, mask);
-  if (int(pts.size()) == k + 1) return {pts};
+  if (int(pts.size()) == k + 1)
+    return {pts};
   const Key apex = *std::min_element(pts.begin(), pts.end());
   std::vector<std::vector<Key>> out, seen_facets;
   for (int u = 0; u < p.n; ++u) {
-    if (!(mask >> u & 1u)) continue;
+    if (!(mask >> u & 1u))
+      continue;
     const unsigned sub = mask & ~(1u << u);
-    if (section_dim(p, sub) != k - 1) continue; // not a facet of the section
+    if (section_dim(p, sub) != k - 1)
+      continue; // not a facet of the section
     std::vector<Key> facet = section_points(p, sub);
     std::sort(facet.begin(), facet.end());
-    if (std::binary_search(facet.begin(), facet.end(), apex)) continue;
+    if (std::binary_search(facet.begin(), facet.end(), apex))
+      continue;
     // Two faces of the pentatope can have the same section (the on-plane face).
-    if (std::find(seen_facets.begin(), seen_facets.end(), facet) != seen_facets.end()) continue;
+    if (std::find(seen_facets.begin(), seen_facets.end(), facet) != seen_facets.end())
+      continue;
     seen_facets.push_back(facet);
     for (std::vector<Key> &piece : pulling(p, sub, k - 1)) {
       piece.insert(piece.begin(), apex);
@@ -136,16 +151,19 @@ int count_side(const Pentatope &p, int s) {
 // For every facet lying in the plane, the cell that produces it: one on the
 // side x >= value when there is one. (Facets of a tet mesh have 3 vertices;
 // the unused fourth slot stays kNoVertex.)
-std::map<std::array<VertexId, 4>, CellId> in_plane_owners(const Mesh &mesh, int axis, double value) {
+std::map<std::array<VertexId, 4>, CellId> in_plane_owners(const Mesh &mesh, int axis,
+                                                          double value) {
   std::map<std::array<VertexId, 4>, CellId> owner;
   std::map<std::array<VertexId, 4>, bool> owner_above;
   for (std::size_t c = 0; c < mesh.num_cells(); ++c) {
     const Pentatope p = classify(mesh, CellId(c), axis, value);
-    if (count_side(p, 0) != p.n - 1) continue;
+    if (count_side(p, 0) != p.n - 1)
+      continue;
     std::array<VertexId, 4> facet{kNoVertex, kNoVertex, kNoVertex, kNoVertex};
     int n = 0;
     for (int i = 0; i < p.n; ++i)
-      if (p.side[i] == 0) facet[n++] = p.ids[i];
+      if (p.side[i] == 0)
+        facet[n++] = p.ids[i];
     std::sort(facet.begin(), facet.end()); // unused entries are kNoVertex and stay last
     const bool above = count_side(p, 1) == 1;
     auto it = owner.find(facet);
@@ -197,7 +215,8 @@ struct VertexMaker {
 
   VertexId get(Key k) {
     auto [it, fresh] = ids.try_emplace(k, VertexId(ids.size()));
-    if (fresh) add(k);
+    if (fresh)
+      add(k);
     return it->second;
   }
 
@@ -207,7 +226,8 @@ struct VertexMaker {
     // Parameter along a -> b (a < b) where x[axis] reaches the value.
     const double lambda = a == b ? 0.0 : (value - pa[axis]) / (pb[axis] - pa[axis]);
     for (int d = 0; d < in.dim; ++d)
-      if (d != axis) out.coords.push_back(a == b ? pa[d] : pa[d] + lambda * (pb[d] - pa[d]));
+      if (d != axis)
+        out.coords.push_back(a == b ? pa[d] : pa[d] + lambda * (pb[d] - pa[d]));
     for (std::size_t n = 0; n < in.point_data.size(); ++n) {
       const DataArray &src = in.point_data[n];
       const bool label = is_label_array(src.name); // kept at a vertex, else kNoLabel
@@ -215,9 +235,9 @@ struct VertexMaker {
         const double va = src.values[std::size_t(a) * src.components + j];
         const double vb = src.values[std::size_t(b) * src.components + j];
         out.point_data[n].values.push_back(a == b || lambda == 0 ? va
-                                           : lambda == 1        ? vb
-                                           : label              ? kNoLabel
-                                                                : (1 - lambda) * va + lambda * vb);
+                                           : lambda == 1         ? vb
+                                           : label               ? kNoLabel
+                                                                 : (1 - lambda) * va + lambda * vb);
       }
     }
   }
@@ -229,13 +249,15 @@ void emit_tet(Mesh &out, std::array<VertexId, 4> t) {
   double pts[12];
   for (int i = 0; i < nv; ++i)
     std::copy(out.point(t[i]), out.point(t[i]) + d, pts + d * i);
-  if (signed_volume(pts, d) < 0) std::swap(t[nv - 2], t[nv - 1]);
+  if (signed_volume(pts, d) < 0)
+    std::swap(t[nv - 2], t[nv - 1]);
   out.cells.insert(out.cells.end(), t.begin(), t.begin() + nv);
 }
 
 void copy_cell_data(const Mesh &in, const std::vector<CellId> &parent, Mesh &out) {
   for (const DataArray &src : in.cell_data) {
-    if (src.name.rfind("bisect:", 0) == 0) continue; // bisection state of the 4D cells
+    if (src.name.rfind("bisect:", 0) == 0)
+      continue; // bisection state of the 4D cells
     DataArray dst{src.name, src.components, {}};
     dst.values.reserve(parent.size() * src.components);
     for (CellId c : parent)
@@ -249,7 +271,8 @@ void copy_cell_data(const Mesh &in, const std::vector<CellId> &parent, Mesh &out
 
 Mesh slice_mesh(const Mesh &mesh4, int axis, double value) {
   if (mesh4.dim != 4 && mesh4.dim != 3)
-    throw InputError("", "slice: needs a 3D or 4D mesh, got dimension " + std::to_string(mesh4.dim));
+    throw InputError("",
+                     "slice: needs a 3D or 4D mesh, got dimension " + std::to_string(mesh4.dim));
   if (axis < 0 || axis >= mesh4.dim)
     throw InputError("", "slice: axis must be 0.." + std::to_string(mesh4.dim - 1) + ", got " +
                              std::to_string(axis));
@@ -265,7 +288,8 @@ Mesh slice_mesh(const Mesh &mesh4, int axis, double value) {
   for (std::size_t c = 0; c < mesh4.num_cells(); ++c) {
     for (const Tet &t : cut_cell(mesh4, CellId(c), axis, value, owners)) {
       std::array<VertexId, 4> ids{kNoVertex, kNoVertex, kNoVertex, kNoVertex};
-      for (int i = 0; i <= out.dim; ++i) ids[i] = maker.get(t[i]);
+      for (int i = 0; i <= out.dim; ++i)
+        ids[i] = maker.get(t[i]);
       emit_tet(out, ids);
       parent.push_back(CellId(c));
     }

@@ -52,15 +52,18 @@ Mesh random_delaunay(int dim, int extra, std::uint64_t seed) {
   std::uniform_real_distribution<double> u(0.05, 0.95);
   std::vector<double> pts;
   for (int c = 0; c < (1 << dim); ++c)
-    for (int k = 0; k < dim; ++k) pts.push_back((c >> k) & 1);
+    for (int k = 0; k < dim; ++k)
+      pts.push_back((c >> k) & 1);
   for (int i = 0; i < extra; ++i)
-    for (int k = 0; k < dim; ++k) pts.push_back(u(rng));
+    for (int k = 0; k < dim; ++k)
+      pts.push_back(u(rng));
   double spacing = 1;
   const std::size_t n = pts.size() / std::size_t(dim);
   for (std::size_t a = 0; a < n; ++a)
     for (std::size_t b = a + 1; b < n; ++b) {
       double s = 0;
-      for (int k = 0; k < dim; ++k) s += std::pow(pts[dim * a + k] - pts[dim * b + k], 2);
+      for (int k = 0; k < dim; ++k)
+        s += std::pow(pts[dim * a + k] - pts[dim * b + k], 2);
       spacing = std::min(spacing, std::sqrt(s));
     }
   Mesh m = delaunay(dim, pts, spacing);
@@ -115,10 +118,12 @@ std::vector<CellId> near_corner(const Mesh &m, double radius) {
     double d2 = 0;
     for (int k = 0; k < m.dim; ++k) {
       double s = 0;
-      for (int i = 0; i < m.cell_size(); ++i) s += m.point(x[i])[k];
+      for (int i = 0; i < m.cell_size(); ++i)
+        s += m.point(x[i])[k];
       d2 += std::pow(s / m.cell_size() - 0.3, 2);
     }
-    if (d2 < radius * radius) out.push_back(CellId(c));
+    if (d2 < radius * radius)
+      out.push_back(CellId(c));
   }
   return out;
 }
@@ -152,8 +157,9 @@ std::vector<Case> cases() {
       for (std::uint64_t seed : {1, 2}) {
         const int n = dim == 4 ? 3 : dim == 3 ? int(3 + seed) : int(4 + seed); // 3..6
         const bool stalls = dim == 3 && mk == Marking::Longest && seed == 1;
-        out.push_back({std::to_string(dim) + "D " + marking_name(mk) + " seed " + std::to_string(seed),
-                       input_mesh(dim, mk, seed), n, stalls});
+        out.push_back(
+            {std::to_string(dim) + "D " + marking_name(mk) + " seed " + std::to_string(seed),
+             input_mesh(dim, mk, seed), n, stalls});
       }
   out.push_back({"4D extruded", extruded_input(3), 3, false});
   return out;
@@ -165,7 +171,8 @@ TEST_CASE("coarsen: passes until none removes anything after N local refinements
           "input's cells and vertices back",
           "[coarsen][2d][3d][4d]") {
   for (Case &k : cases()) {
-    if (k.stalls) continue;
+    if (k.stalls)
+      continue;
     INFO(k.name << ", " << k.iterations << " iterations");
     const Mesh input = k.mesh;
     Mesh m = input;
@@ -226,7 +233,8 @@ TEST_CASE("coarsen: partial coarsening of a region conforms", "[coarsen][2d][3d]
     std::vector<char> marks(m.num_cells(), 0);
     for (std::size_t c = 0; c < m.num_cells(); ++c) {
       double x = 0;
-      for (int i = 0; i < m.cell_size(); ++i) x += m.point(m.cell(CellId(c))[i])[0];
+      for (int i = 0; i < m.cell_size(); ++i)
+        x += m.point(m.cell(CellId(c))[i])[0];
       marks[c] = x / m.cell_size() < 0.4;
     }
     CoarsenOptions o;
@@ -240,7 +248,8 @@ TEST_CASE("coarsen: partial coarsening of a region conforms", "[coarsen][2d][3d]
     Mesh again = m;
     refine_locally(again, 1);
     REQUIRE_CONFORMING(again, inv);
-    if (k.stalls) continue;
+    if (k.stalls)
+      continue;
     coarsen_all(m, 0);
     REQUIRE(cell_shapes(m) == cell_shapes(k.mesh));
   }
@@ -259,7 +268,8 @@ TEST_CASE("coarsen: refining after coarsening gives the cells refining the input
     coarsen_all(one, 1);
     REQUIRE(one.num_cells() < direct.num_cells());
     REQUIRE_CONFORMING(one, inv);
-    if (k.stalls) continue;
+    if (k.stalls)
+      continue;
     Mesh m = direct;
     coarsen_all(m, 0);
     refine_locally(m, k.iterations);
@@ -275,14 +285,16 @@ TEST_CASE("coarsen: the tree survives a .vtu and a .msh file", "[coarsen][io]") 
     Mesh m = k.mesh;
     refine_locally(m, k.iterations);
     for (const char *ext : {".vtu", ".msh"}) {
-      if (m.dim == 4 && std::string(ext) == ".msh") continue;
+      if (m.dim == 4 && std::string(ext) == ".msh")
+        continue;
       const std::string path = (dir / (std::string("refined") + ext)).string();
       save_mesh(path, m);
       Mesh back = load_mesh(path);
       REQUIRE(back.generation == m.generation);
       REQUIRE(back.parent_edge == m.parent_edge);
       REQUIRE(back.point_data.size() == m.point_data.size());
-      if (k.stalls) continue;
+      if (k.stalls)
+        continue;
       coarsen_all(back, 0);
       REQUIRE(cell_shapes(back) == cell_shapes(k.mesh));
     }
@@ -294,7 +306,8 @@ TEST_CASE("coarsen: cell arrays take the common value, the mean, or the sum", "[
   Mesh m = input_mesh(3, Marking::Longest, 4);
   const std::size_t nc = m.num_cells();
   DataArray id{"id", 1, {}}, count{"count", 1, std::vector<double>(nc, 1.0)};
-  for (std::size_t c = 0; c < nc; ++c) id.values.push_back(double(c));
+  for (std::size_t c = 0; c < nc; ++c)
+    id.values.push_back(double(c));
   m.cell_data = {id, count};
   Mesh fine = m;
   refine_locally(fine, 4);
@@ -310,7 +323,8 @@ TEST_CASE("coarsen: cell arrays take the common value, the mean, or the sum", "[
   REQUIRE(fine.cell_data[0].values == id.values);
   // count: summed over the 2^g descendants of each input cell.
   double total = 0;
-  for (double v : fine.cell_data[1].values) total += v;
+  for (double v : fine.cell_data[1].values)
+    total += v;
   Mesh counted = m;
   refine_locally(counted, 4);
   REQUIRE(total == double(counted.num_cells()));
@@ -334,7 +348,8 @@ TEST_CASE("coarsen: unmarked cells and a file without the tree stop it", "[coars
   REQUIRE(coarsen_all(back, 3).removed_vertices == 0);
 }
 
-TEST_CASE("coarsen: bad tree arrays are input errors naming the file and the array", "[coarsen][io]") {
+TEST_CASE("coarsen: bad tree arrays are input errors naming the file and the array",
+          "[coarsen][io]") {
   Mesh m = input_mesh(2, Marking::Sorted, 6);
   refine_locally(m, 2);
   const std::size_t nv = m.num_vertices();
@@ -343,7 +358,8 @@ TEST_CASE("coarsen: bad tree arrays are input errors naming the file and the arr
     encode_state(e);
     for (auto *arrays : {&e.cell_data, &e.point_data})
       for (DataArray &a : *arrays)
-        if (a.name == array) a.values[v] = value;
+        if (a.name == array)
+          a.values[v] = value;
     try {
       decode_state(e, "bad.vtu");
       FAIL("no error for " << array << " = " << value);

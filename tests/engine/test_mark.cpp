@@ -2,9 +2,9 @@
 #include "bisect/generate.hpp"
 #include "bisect/io.hpp"
 #include "bisect/mark.hpp"
+#include "bisect/refine.hpp"
 #include "bisect/state.hpp"
 #include "core/numbering.hpp"
-#include "bisect/refine.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -45,7 +45,8 @@ TEST_CASE("longest marking: planar tets start in Maubach, A/M/O tets in Stage 1"
   EdgeOrder order = edge_order(m);
   order.marking = Marking::Longest;
   std::vector<TetType> types;
-  for (std::size_t c = 0; c < m.num_cells(); ++c) types.push_back(classify_tet(order, m.cell(CellId(c))));
+  for (std::size_t c = 0; c < m.num_cells(); ++c)
+    types.push_back(classify_tet(order, m.cell(CellId(c))));
   mark_mesh(m, Marking::Longest);
   std::size_t nonplanar = 0;
   for (std::size_t c = 0; c < m.num_cells(); ++c) {
@@ -60,7 +61,8 @@ TEST_CASE("longest marking: planar tets start in Maubach, A/M/O tets in Stage 1"
 
 // The marks a Maubach tuple (x0, x1, x2, x3)_2 implies: refinement edge
 // (x0, x2); face opposite x0 marked (x1, x2); face opposite x2 marked (x0, x1).
-TEST_CASE("longest marking: children of A, M, O tets are planar with Arnold's marks", "[mark][3d]") {
+TEST_CASE("longest marking: children of A, M, O tets are planar with Arnold's marks",
+          "[mark][3d]") {
   Mesh m = ball();
   mark_mesh(m, Marking::Longest);
   EdgeOrder order;
@@ -79,7 +81,8 @@ TEST_CASE("longest marking: children of A, M, O tets are planar with Arnold's ma
   std::size_t checked = 0;
   for (std::size_t i = 0; i < stage1.size(); ++i) {
     const VertexId *x = m.cell(stage1[i]);
-    if (m.stage[stage1[i]] != Stage::Maubach || m.tag[stage1[i]] != 2 || x[3] < nv0) continue;
+    if (m.stage[stage1[i]] != Stage::Maubach || m.tag[stage1[i]] != 2 || x[3] < nv0)
+      continue;
     // The child (v, F) keeps the parent face F = {x0, x1, x2}; its refinement
     // edge is F's consistent edge; each face containing v is marked by its
     // edge opposite v.
@@ -88,7 +91,8 @@ TEST_CASE("longest marking: children of A, M, O tets are planar with Arnold's ma
     std::set<VertexId> want{f[e.first], f[e.second]}, got{x[0], x[2]};
     REQUIRE(want == got);
     std::set<VertexId> parent(parents[i].begin(), parents[i].end());
-    for (int k = 0; k < 3; ++k) REQUIRE(parent.count(f[k]) == 1);
+    for (int k = 0; k < 3; ++k)
+      REQUIRE(parent.count(f[k]) == 1);
     // Maubach marks: (x1, x2) and (x0, x1): both lie in F (opposite v) and
     // share x1, so the three marks bound one triangle: planar.
     ++checked;
@@ -129,6 +133,8 @@ TEST_CASE("state arrays that are not a permutation are rejected", "[mark][io]") 
   encode_state(m);
   testing::to_legacy_state(m);
   for (DataArray &a : m.cell_data)
-    if (a.name == kOrderArray) a.values[1] = a.values[0];
-  REQUIRE_THROWS_WITH(decode_state(m, "in.vtu"), Catch::Contains("in.vtu") && Catch::Contains("permutation"));
+    if (a.name == kOrderArray)
+      a.values[1] = a.values[0];
+  REQUIRE_THROWS_WITH(decode_state(m, "in.vtu"),
+                      Catch::Contains("in.vtu") && Catch::Contains("permutation"));
 }

@@ -2,10 +2,10 @@
 #include "bisect/generate.hpp"
 #include "bisect/io.hpp"
 #include "bisect/mark.hpp"
-#include "bisect/state.hpp"
 #include "bisect/measure.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
+#include "bisect/state.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -48,7 +48,8 @@ const Marking kMarkings[] = {Marking::Index, Marking::Longest, Marking::Sorted};
 
 } // namespace
 
-TEST_CASE("closure: the bundled 2D mesh stays conforming over 10 local iterations", "[refine][2d]") {
+TEST_CASE("closure: the bundled 2D mesh stays conforming over 10 local iterations",
+          "[refine][2d]") {
   Mesh m = load("square.msh");
   for (Marking mk : kMarkings)
     refine_and_check(m, mk, R"({"type":"sphere","center":[0.5,0.5],"radius":0.3})", 10);
@@ -58,19 +59,22 @@ TEST_CASE("closure: the bundled ball stays conforming over 10 iterations around 
           "[refine][3d]") {
   Mesh m = load("ball.msh");
   for (Marking mk : kMarkings)
-    refine_and_check(m, mk,
-                     R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,"normal":[1,0,0],"offset":0.5})",
-                     10);
+    refine_and_check(
+        m, mk,
+        R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,"normal":[1,0,0],"offset":0.5})",
+        10);
 }
 
 TEST_CASE("closure: perturbed and renumbered meshes stay conforming", "[refine][2d][3d]") {
   for (std::uint64_t seed = 1; seed <= 6; ++seed) {
     for (int dim : {2, 3}) {
-      Mesh m = testing::renumbered(testing::perturbed_inside_box(generate_kuhn(dim, 4), 0.06, seed), seed);
+      Mesh m = testing::renumbered(testing::perturbed_inside_box(generate_kuhn(dim, 4), 0.06, seed),
+                                   seed);
       prepare_input(m, "perturbed");
       std::string region = dim == 2 ? R"({"type":"sphere","center":[0.3,0.4],"radius":0.35})"
                                     : R"({"type":"sphere","center":[0.3,0.4,0.5],"radius":0.35})";
-      for (Marking mk : kMarkings) refine_and_check(m, mk, region, 8);
+      for (Marking mk : kMarkings)
+        refine_and_check(m, mk, region, 8);
     }
     Mesh ball = testing::renumbered(load("ball.msh"), seed);
     refine_and_check(ball, seed % 2 ? Marking::Longest : Marking::Index,
@@ -83,7 +87,8 @@ TEST_CASE("closure: a box region touching the boundary keeps boundary measure", 
   refine_and_check(m, Marking::Longest, R"({"type":"box","min":[1.5,-2,-2],"max":[3,2,2]})", 6);
 }
 
-TEST_CASE("refinement is deterministic: two runs through a saved file equal one run", "[refine][io]") {
+TEST_CASE("refinement is deterministic: two runs through a saved file equal one run",
+          "[refine][io]") {
   const std::string region_json =
       R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,"normal":[1,0,0],"offset":0.5})";
   for (Marking mk : {Marking::Index, Marking::Longest}) {
@@ -91,19 +96,24 @@ TEST_CASE("refinement is deterministic: two runs through a saved file equal one 
       Mesh one = load("ball.msh");
       mark_mesh(one, mk);
       auto region = parse_region(region_json, 3, "test");
-      for (int it = 0; it < 5; ++it) refine(one, select_cells(one, *region));
+      for (int it = 0; it < 5; ++it)
+        refine(one, select_cells(one, *region));
 
       Mesh two = load("ball.msh");
       mark_mesh(two, mk);
-      for (int it = 0; it < 3; ++it) refine(two, select_cells(two, *region));
-      std::string path = (std::filesystem::temp_directory_path() / (std::string("bisect-two-runs") + ext)).string();
+      for (int it = 0; it < 3; ++it)
+        refine(two, select_cells(two, *region));
+      std::string path =
+          (std::filesystem::temp_directory_path() / (std::string("bisect-two-runs") + ext))
+              .string();
       encode_state(two);
       write_mesh(path, two);
       Mesh back = read_mesh(path);
       prepare_input(back, path);
       REQUIRE(decode_state(back, path));
       REQUIRE(back.marking == mk);
-      for (int it = 0; it < 2; ++it) refine(back, select_cells(back, *region));
+      for (int it = 0; it < 2; ++it)
+        refine(back, select_cells(back, *region));
       std::filesystem::remove(path);
 
       REQUIRE(back.num_cells() == one.num_cells());
@@ -117,7 +127,8 @@ TEST_CASE("refinement is deterministic: two runs through a saved file equal one 
 TEST_CASE("cell data is inherited and point data interpolated at midpoints", "[refine][3d]") {
   Mesh m = generate_kuhn(3, 2);
   DataArray cd{"material", 1, {}}, pd{"f", 1, {}};
-  for (std::size_t c = 0; c < m.num_cells(); ++c) cd.values.push_back(double(c % 3));
+  for (std::size_t c = 0; c < m.num_cells(); ++c)
+    cd.values.push_back(double(c % 3));
   for (std::size_t v = 0; v < m.num_vertices(); ++v) {
     const double *p = m.point(VertexId(v));
     pd.values.push_back(2 * p[0] - p[1] + 3 * p[2]); // linear: interpolation is exact
@@ -127,7 +138,8 @@ TEST_CASE("cell data is inherited and point data interpolated at midpoints", "[r
   mark_mesh(m, Marking::Index);
   Mesh original = m;
   auto region = parse_region(R"({"type":"sphere","center":[0.5,0.5,0.5],"radius":0.4})", 3, "t");
-  for (int it = 0; it < 4; ++it) refine(m, select_cells(m, *region));
+  for (int it = 0; it < 4; ++it)
+    refine(m, select_cells(m, *region));
   for (std::size_t v = 0; v < m.num_vertices(); ++v) {
     const double *p = m.point(VertexId(v));
     REQUIRE(m.point_data[0].values[v] == Approx(2 * p[0] - p[1] + 3 * p[2]).margin(1e-12));
@@ -139,7 +151,8 @@ TEST_CASE("cell data is inherited and point data interpolated at midpoints", "[r
     cell_points(m, CellId(c), pts);
     double g[3] = {0, 0, 0};
     for (int i = 0; i < 4; ++i)
-      for (int k = 0; k < 3; ++k) g[k] += pts[i * 3 + k] / 4;
+      for (int k = 0; k < 3; ++k)
+        g[k] += pts[i * 3 + k] / 4;
     bool found = false;
     for (std::size_t o = 0; o < original.num_cells() && !found; ++o) {
       cell_points(original, CellId(o), opts);
@@ -188,7 +201,8 @@ TEST_CASE("32-bit ids: running out of vertex ids stops cleanly", "[refine][2d]")
   RefineLimits limits;
   limits.max_vertices = m.num_vertices() + 5;
   std::vector<CellId> all(m.num_cells());
-  for (std::size_t c = 0; c < all.size(); ++c) all[c] = CellId(c);
+  for (std::size_t c = 0; c < all.size(); ++c)
+    all[c] = CellId(c);
   RefineResult r = refine(m, all, limits);
   REQUIRE(r.limit_reached);
   REQUIRE(m.cells == before.cells);
@@ -199,8 +213,8 @@ TEST_CASE("32-bit ids: running out of vertex ids stops cleanly", "[refine][2d]")
 namespace {
 
 struct UniformRun {
-  std::vector<double> qmin;  // per iteration 0..k
-  std::size_t classes = 0;    // over every generated cell
+  std::vector<double> qmin; // per iteration 0..k
+  std::size_t classes = 0;  // over every generated cell
 };
 
 UniformRun uniform(Mesh m, Marking marking, int iterations) {
@@ -225,31 +239,37 @@ UniformRun uniform(Mesh m, Marking marking, int iterations) {
 
 TEST_CASE("uniform tet: at most 36 classes with index, 72 with longest; min quality period 3",
           "[refine][3d][quality]") {
-  for (SimplexShape shape : {SimplexShape::Equilateral, SimplexShape::Cartesian, SimplexShape::Random}) {
+  for (SimplexShape shape :
+       {SimplexShape::Equilateral, SimplexShape::Cartesian, SimplexShape::Random}) {
     for (std::uint64_t seed : {1, 2, 3}) {
-      if (shape != SimplexShape::Random && seed > 1) continue;
+      if (shape != SimplexShape::Random && seed > 1)
+        continue;
       Mesh tet = generate_simplex(3, shape, seed);
       for (Marking mk : {Marking::Index, Marking::Longest, Marking::Sorted}) {
         UniformRun run = uniform(tet, mk, 12);
         INFO("shape " << int(shape) << " seed " << seed << " marking " << marking_name(mk)
                       << " classes " << run.classes);
         REQUIRE(run.classes <= (mk == Marking::Longest ? 72u : 36u));
-        for (int k = 6; k + 3 <= 12; ++k) REQUIRE(run.qmin[k] == Approx(run.qmin[k + 3]).epsilon(1e-9));
+        for (int k = 6; k + 3 <= 12; ++k)
+          REQUIRE(run.qmin[k] == Approx(run.qmin[k + 3]).epsilon(1e-9));
         // The quality never drops below its cycle's minimum.
         double floor = *std::min_element(run.qmin.begin() + 6, run.qmin.end());
-        for (double q : run.qmin) REQUIRE(q >= floor * (1 - 1e-9));
+        for (double q : run.qmin)
+          REQUIRE(q >= floor * (1 - 1e-9));
       }
     }
   }
 }
 
-TEST_CASE("uniform triangle: newest vertex bisection has at most 4 classes, period 2", "[refine][2d][quality]") {
+TEST_CASE("uniform triangle: newest vertex bisection has at most 4 classes, period 2",
+          "[refine][2d][quality]") {
   for (SimplexShape shape : {SimplexShape::Equilateral, SimplexShape::Random}) {
     Mesh tri = generate_simplex(2, shape, 4);
     UniformRun run = uniform(tri, Marking::Index, 10);
     INFO("classes " << run.classes);
     REQUIRE(run.classes <= 4u);
-    for (int k = 2; k + 2 <= 10; ++k) REQUIRE(run.qmin[k] == Approx(run.qmin[k + 2]).epsilon(1e-9));
+    for (int k = 2; k + 2 <= 10; ++k)
+      REQUIRE(run.qmin[k] == Approx(run.qmin[k + 2]).epsilon(1e-9));
   }
 }
 
@@ -262,7 +282,8 @@ TEST_CASE("precision limit: refining around a point stops before an edge too fin
       mark_mesh(m, Marking::Index);
       const Invariants inv = measure_invariants(m);
       std::string spec = R"({"type": "sphere", "solid": true, "radius": 1e-300, "center": [)";
-      for (int k = 0; k < dim; ++k) spec += (k ? ", " : "") + std::to_string(offset + 0.3 + 0.05 * k);
+      for (int k = 0; k < dim; ++k)
+        spec += (k ? ", " : "") + std::to_string(offset + 0.3 + 0.05 * k);
       auto region = parse_region(spec + "]}", dim, "test");
       int it = 0;
       RefineResult r;
@@ -307,11 +328,18 @@ TEST_CASE("pinched meshes: cells meeting only at a vertex or an edge are accepte
     std::vector<VertexId> cells;
   };
   const Case cases[] = {
-      {"2D: two triangles sharing a vertex", 2, {0, 0, 1, 0, 0, 1, -1, 0, 0, -1}, {0, 1, 2, 0, 3, 4}},
-      {"3D: two tets sharing a vertex", 3,
-       {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1}, {0, 1, 2, 3, 0, 4, 5, 6}},
-      {"3D: two tets sharing an edge", 3,
-       {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, -1, 0, 0.5, 0, -1, 0.5}, {0, 1, 2, 3, 0, 1, 4, 5}},
+      {"2D: two triangles sharing a vertex",
+       2,
+       {0, 0, 1, 0, 0, 1, -1, 0, 0, -1},
+       {0, 1, 2, 0, 3, 4}},
+      {"3D: two tets sharing a vertex",
+       3,
+       {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1},
+       {0, 1, 2, 3, 0, 4, 5, 6}},
+      {"3D: two tets sharing an edge",
+       3,
+       {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, -1, 0, 0.5, 0, -1, 0.5},
+       {0, 1, 2, 3, 0, 1, 4, 5}},
   };
   for (const Case &k : cases)
     for (Marking marking : {Marking::Index, Marking::Longest, Marking::Sorted}) {
@@ -330,7 +358,8 @@ TEST_CASE("pinched meshes: cells meeting only at a vertex or an edge are accepte
       // Around the pinch point, then elsewhere: the closure crosses the pinch.
       for (const char *centre : {"0", "0.3"}) {
         std::string spec = R"({"type": "sphere", "radius": 0.2, "center": [)";
-        for (int d = 0; d < k.dim; ++d) spec += std::string(d ? ", " : "") + centre;
+        for (int d = 0; d < k.dim; ++d)
+          spec += std::string(d ? ", " : "") + centre;
         auto region = parse_region(spec + "]}", k.dim, "test");
         for (int it = 0; it < 4; ++it) {
           refine(m, select_cells(m, *region));

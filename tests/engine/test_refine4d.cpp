@@ -25,11 +25,13 @@ Mesh two_pentatopes() {
 
 } // namespace
 
-TEST_CASE("4D: skipping Stage 1 with the index order is not conformal; Stage 1 is", "[refine][4d]") {
+TEST_CASE("4D: skipping Stage 1 with the index order is not conformal; Stage 1 is",
+          "[refine][4d]") {
   Mesh with_stage1 = two_pentatopes();
   mark_mesh(with_stage1, Marking::Index);
   Invariants inv = measure_invariants(with_stage1);
-  for (int it = 0; it < 3; ++it) refine_uniform(with_stage1);
+  for (int it = 0; it < 3; ++it)
+    refine_uniform(with_stage1);
   REQUIRE_CONFORMING(with_stage1, inv);
 
   // Without Stage 1 every pentatope is (a, c, b, e, d)_2 for sorted ids a<b<c<d<e.
@@ -43,7 +45,8 @@ TEST_CASE("4D: skipping Stage 1 with the index order is not conformal; Stage 1 i
     skipped.stage[c] = Stage::Maubach;
     skipped.tag[c] = 2;
   }
-  for (int it = 0; it < 3; ++it) refine_uniform(skipped);
+  for (int it = 0; it < 3; ++it)
+    refine_uniform(skipped);
   CheckResult r = check_conformity(skipped, &inv);
   INFO(r.failure);
   REQUIRE_FALSE(r.ok);
@@ -55,8 +58,8 @@ TEST_CASE("4D: local refinement of renumbered Kuhn hypercubes stays conforming",
       Mesh m = testing::renumbered(generate_kuhn(4, 2), seed);
       mark_mesh(m, mk);
       Invariants inv = measure_invariants(m);
-      auto region = parse_region(
-          R"({"type":"sphere","center":[0.3,0.4,0.5,0.45],"radius":0.4})", 4, "t");
+      auto region =
+          parse_region(R"({"type":"sphere","center":[0.3,0.4,0.5,0.45],"radius":0.4})", 4, "t");
       for (int it = 1; it <= 6; ++it) {
         refine(m, select_cells(m, *region));
         INFO("seed " << seed << " marking " << marking_name(mk) << " iteration " << it);
@@ -84,7 +87,8 @@ TEST_CASE("4D: Stage 1 leaves every grandchild a Maubach tuple with tag 2", "[re
   for (std::size_t c = 0; c < m.num_cells(); ++c) {
     REQUIRE(m.stage[c] == Stage::Maubach);
     const VertexId *x = m.cell(CellId(c));
-    if (m.tag[c] != 2) continue;
+    if (m.tag[c] != 2)
+      continue;
     ++grandchildren;
     REQUIRE(x[4] == 5);
     REQUIRE(x[3] > x[4]);
@@ -92,7 +96,8 @@ TEST_CASE("4D: Stage 1 leaves every grandchild a Maubach tuple with tag 2", "[re
   REQUIRE(grandchildren >= 2);
 }
 
-TEST_CASE("4D uniform: min and max quality cycle with period 4; classes within 1536", "[refine][4d][quality]") {
+TEST_CASE("4D uniform: min and max quality cycle with period 4; classes within 1536",
+          "[refine][4d][quality]") {
   for (SimplexShape shape : {SimplexShape::Equilateral, SimplexShape::Random}) {
     for (Marking mk : {Marking::Longest, Marking::Index, Marking::Sorted}) {
       Mesh m = generate_simplex(4, shape, 2);

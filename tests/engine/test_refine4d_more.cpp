@@ -4,10 +4,10 @@
 #include "bisect/generate.hpp"
 #include "bisect/io.hpp"
 #include "bisect/mark.hpp"
-#include "bisect/state.hpp"
 #include "bisect/measure.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
+#include "bisect/state.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -27,15 +27,18 @@ Mesh random_delaunay_4d(int extra, std::uint64_t seed) {
   std::uniform_real_distribution<double> u(0.05, 0.95);
   std::vector<double> pts;
   for (int c = 0; c < 16; ++c)
-    for (int k = 0; k < 4; ++k) pts.push_back((c >> k) & 1);
+    for (int k = 0; k < 4; ++k)
+      pts.push_back((c >> k) & 1);
   for (int i = 0; i < extra; ++i)
-    for (int k = 0; k < 4; ++k) pts.push_back(u(rng));
+    for (int k = 0; k < 4; ++k)
+      pts.push_back(u(rng));
   double spacing = 1;
   const std::size_t n = pts.size() / 4;
   for (std::size_t a = 0; a < n; ++a)
     for (std::size_t b = a + 1; b < n; ++b) {
       double s = 0;
-      for (int k = 0; k < 4; ++k) s += std::pow(pts[4 * a + k] - pts[4 * b + k], 2);
+      for (int k = 0; k < 4; ++k)
+        s += std::pow(pts[4 * a + k] - pts[4 * b + k], 2);
       spacing = std::min(spacing, std::sqrt(s));
     }
   Mesh m = delaunay(4, pts, spacing);
@@ -75,7 +78,8 @@ TEST_CASE("4D: local refinement of random Delaunay meshes with random numbering 
       auto region = parse_region(spec, 4, "region");
       for (int it = 1; it <= 4; ++it) {
         refine(m, select_cells(m, *region));
-        INFO("seed " << seed << " marking " << marking_name(mk) << " region " << spec << " iteration " << it);
+        INFO("seed " << seed << " marking " << marking_name(mk) << " region " << spec
+                     << " iteration " << it);
         REQUIRE_CONFORMING(m, inv);
         ++checked;
       }
@@ -84,7 +88,8 @@ TEST_CASE("4D: local refinement of random Delaunay meshes with random numbering 
   REQUIRE(checked == 4 * 3 * 4);
 }
 
-TEST_CASE("4D: many seeds of random Delaunay meshes stay conforming", "[refine][4d][delaunay][slow]") {
+TEST_CASE("4D: many seeds of random Delaunay meshes stay conforming",
+          "[refine][4d][delaunay][slow]") {
   for (std::uint64_t seed = 100; seed < 116; ++seed) {
     for (Marking mk : {Marking::Index, Marking::Longest, Marking::Sorted}) {
       Mesh m = random_delaunay_4d(40, seed);
@@ -94,11 +99,13 @@ TEST_CASE("4D: many seeds of random Delaunay meshes stay conforming", "[refine][
       std::uniform_real_distribution<double> u(0, 1);
       std::string spec = "{\"type\":\"sphere\",\"center\":[" + std::to_string(u(rng)) + "," +
                          std::to_string(u(rng)) + "," + std::to_string(u(rng)) + "," +
-                         std::to_string(u(rng)) + "],\"radius\":" + std::to_string(0.2 + 0.4 * u(rng)) + "}";
+                         std::to_string(u(rng)) +
+                         "],\"radius\":" + std::to_string(0.2 + 0.4 * u(rng)) + "}";
       auto region = parse_region(spec, 4, "region");
       for (int it = 1; it <= 5; ++it) {
         refine(m, select_cells(m, *region));
-        INFO("seed " << seed << " marking " << marking_name(mk) << " region " << spec << " iteration " << it);
+        INFO("seed " << seed << " marking " << marking_name(mk) << " region " << spec
+                     << " iteration " << it);
         REQUIRE_CONFORMING(m, inv);
       }
     }
@@ -120,7 +127,8 @@ TEST_CASE("Forced mark types: the marks have the type asked for", "[mark][4d]") 
     REQUIRE(simplex_type(edge_order(m), m.cell(0), 3) == type);
   }
   Mesh m = generate_simplex(4, SimplexShape::Equilateral);
-  REQUIRE_THROWS_WITH(force_type(m, "P_AO"), Catch::Contains("does not arise") && Catch::Contains("A_PO"));
+  REQUIRE_THROWS_WITH(force_type(m, "P_AO"),
+                      Catch::Contains("does not arise") && Catch::Contains("A_PO"));
   Mesh two = generate_kuhn(3, 1);
   REQUIRE_THROWS(force_type(two, "P"));
 }
@@ -155,21 +163,24 @@ TEST_CASE("Forced marks survive a file and decide the first bisections", "[mark]
   encode_state(m);
   DataArray *rank = nullptr;
   for (DataArray &a : m.cell_data)
-    if (a.name == kEdgeRankArray) rank = &a;
+    if (a.name == kEdgeRankArray)
+      rank = &a;
   REQUIRE(rank);
   REQUIRE(rank->components == 10);
   for (CellId c = 0; c < 2; ++c) {
     const VertexId *x = m.cell(c);
     for (int i = 0, k = 0; i < 5; ++i)
       for (int j = i + 1; j < 5; ++j, ++k)
-        if (edge_key(x[i], x[j]) == edge_key(0, 15)) rank->values[c * 10 + k] = 3 + c;
+        if (edge_key(x[i], x[j]) == edge_key(0, 15))
+          rank->values[c * 10 + k] = 3 + c;
   }
   REQUIRE_THROWS_WITH(decode_state(m, "forced.vtu"),
                       Catch::Contains("forced.vtu") && Catch::Contains("two different ranks"));
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("Forced P_AA and A_PO pentatopes cycle with period 4 (seed 000 §5.1)", "[refine][4d][quality]") {
+TEST_CASE("Forced P_AA and A_PO pentatopes cycle with period 4 (seed 000 §5.1)",
+          "[refine][4d][quality]") {
   for (const char *type : {"P_AA", "A_PO"}) {
     Mesh m = generate_simplex(4, SimplexShape::Equilateral);
     force_type(m, type);
@@ -179,7 +190,8 @@ TEST_CASE("Forced P_AA and A_PO pentatopes cycle with period 4 (seed 000 §5.1)"
     const int iterations = 17;
     for (int it = 1; it <= iterations; ++it) {
       refine_uniform(m);
-      if (it <= 8) REQUIRE_CONFORMING(m, inv);
+      if (it <= 8)
+        REQUIRE_CONFORMING(m, inv);
       QualitySummary q = quality_summary(m);
       qmin.push_back(q.min);
       qmax.push_back(q.max);
@@ -211,7 +223,8 @@ TEST_CASE("The faceted octant extrudes only with --hull, then refines conforming
     Mesh r = m;
     mark_mesh(r, mk);
     Invariants inv = measure_invariants(r);
-    auto region = parse_region(R"({"type":"sphere","center":[0,0,0,0],"radius":0.25})", 4, "hypersphere");
+    auto region =
+        parse_region(R"({"type":"sphere","center":[0,0,0,0],"radius":0.25})", 4, "hypersphere");
     for (int it = 1; it <= 6; ++it) {
       refine(r, select_cells(r, *region));
       INFO("marking " << marking_name(mk) << " iteration " << it);

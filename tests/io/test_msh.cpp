@@ -523,7 +523,8 @@ TEST_CASE("msh: triangles not in one plane z = c are rejected, with a hint", "[i
   } catch (const InputError &x) {
     e = x.what();
   }
-  CHECK_THAT(e, Contains(path) && Contains("not in one plane z = c") && Contains("Physical Volume"));
+  CHECK_THAT(e,
+             Contains(path) && Contains("not in one plane z = c") && Contains("Physical Volume"));
   fs::remove(path);
 }
 
@@ -539,7 +540,8 @@ TEST_CASE("msh: a triangle mesh in the plane z = 5 is read, refined and written 
   REQUIRE(m.dim == 2);
   const DataArray *z = find_array(m.point_data, kPlaneZArray);
   REQUIRE(z);
-  for (double v : z->values) CHECK(v == 5.0);
+  for (double v : z->values)
+    CHECK(v == 5.0);
   const std::string out = temp_path("plane5-out.msh");
   write_mesh(out, m);
   const std::string written = read_file(out);

@@ -4,9 +4,9 @@
 #include "bisect/extrude.hpp"
 #include "bisect/generate.hpp"
 #include "bisect/mark.hpp"
-#include "bisect/state.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
+#include "bisect/state.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -20,7 +20,8 @@ namespace {
 
 DataArray &array_named(Mesh &m, const char *name) {
   for (DataArray &a : m.cell_data)
-    if (a.name == name) return a;
+    if (a.name == name)
+      return a;
   FAIL("no array " << name);
   return m.cell_data.front();
 }
@@ -29,11 +30,13 @@ DataArray &array_named(Mesh &m, const char *name) {
 Mesh refined(int dim, Marking marking, int iterations, std::uint64_t seed) {
   Mesh m = testing::renumbered(generate_kuhn(dim, 2), seed);
   mark_mesh(m, marking);
-  const std::string region = dim == 2   ? R"({"type": "sphere", "center": [0.3, 0.4], "radius": 0.3})"
-                             : dim == 3 ? R"({"type": "sphere", "center": [0.3, 0.4, 0.5], "radius": 0.3})"
-                                        : R"({"type": "sphere", "center": [0.3, 0.4, 0.5, 0.6], "radius": 0.3})";
+  const std::string region =
+      dim == 2   ? R"({"type": "sphere", "center": [0.3, 0.4], "radius": 0.3})"
+      : dim == 3 ? R"({"type": "sphere", "center": [0.3, 0.4, 0.5], "radius": 0.3})"
+                 : R"({"type": "sphere", "center": [0.3, 0.4, 0.5, 0.6], "radius": 0.3})";
   auto r = parse_region(region, dim, "test");
-  for (int it = 0; it < iterations; ++it) refine(m, select_cells(m, *r));
+  for (int it = 0; it < iterations; ++it)
+    refine(m, select_cells(m, *r));
   return m;
 }
 
@@ -54,7 +57,8 @@ void require_refines_conformingly(Mesh m) {
   REQUIRE_CONFORMING(m, inv);
   std::vector<double> c(std::size_t(m.dim), 0.37);
   std::string spec = R"({"type": "sphere", "center": [)";
-  for (int k = 0; k < m.dim; ++k) spec += (k ? ", " : "") + std::to_string(0.37 + 0.05 * k);
+  for (int k = 0; k < m.dim; ++k)
+    spec += (k ? ", " : "") + std::to_string(0.37 + 0.05 * k);
   spec += R"(], "radius": 0.2})";
   auto r = parse_region(spec, m.dim, "test");
   for (int it = 0; it < 3; ++it) {
@@ -69,7 +73,8 @@ TEST_CASE("state: every state bisect writes is accepted as consistent", "[state]
   for (int dim : {2, 3, 4})
     for (Marking marking : {Marking::Index, Marking::Longest, Marking::Sorted})
       for (int iterations : {0, 1, 3}) {
-        INFO("dim " << dim << ", marking " << marking_name(marking) << ", iterations " << iterations);
+        INFO("dim " << dim << ", marking " << marking_name(marking) << ", iterations "
+                    << iterations);
         Mesh m = refined(dim, marking, iterations, 7 + iterations);
         encode_state(m);
         REQUIRE_NOTHROW(reload(m));
@@ -83,14 +88,16 @@ TEST_CASE("state: an extruded space-time mesh and a forced type are accepted", "
     // Kuhn meshes are coloured by the coordinate sum (mod dim + 1) of the lattice point.
     for (std::size_t v = 0; v < base.num_vertices(); ++v) {
       double s = 0;
-      for (int k = 0; k < dim; ++k) s += base.point(VertexId(v))[k] * 2;
+      for (int k = 0; k < dim; ++k)
+        s += base.point(VertexId(v))[k] * 2;
       colour[v] = std::uint8_t(int(std::lround(s)) % (dim + 1));
     }
     Mesh st = extrude_coloured(base, colour, {0.0, 0.5, 1.0});
     Mesh copy = st;
-    auto r = parse_region(dim == 2 ? R"({"type": "sphere", "center": [0.3, 0.4, 0.5], "radius": 0.3})"
-                                   : R"({"type": "sphere", "center": [0.3, 0.4, 0.5, 0.6], "radius": 0.3})",
-                          st.dim, "test");
+    auto r = parse_region(
+        dim == 2 ? R"({"type": "sphere", "center": [0.3, 0.4, 0.5], "radius": 0.3})"
+                 : R"({"type": "sphere", "center": [0.3, 0.4, 0.5, 0.6], "radius": 0.3})",
+        st.dim, "test");
     refine(st, select_cells(st, *r));
     encode_state(st);
     REQUIRE_NOTHROW(reload(st));
@@ -100,7 +107,8 @@ TEST_CASE("state: an extruded space-time mesh and a forced type are accepted", "
   for (const char *type : {"A_PO", "P_AA"}) {
     Mesh m = generate_simplex(4, SimplexShape::Equilateral);
     force_type(m, type);
-    for (int i = 0; i < 4; ++i) refine_uniform(m);
+    for (int i = 0; i < 4; ++i)
+      refine_uniform(m);
     encode_state(m);
     REQUIRE_NOTHROW(reload(m));
   }
@@ -129,10 +137,10 @@ TEST_CASE("state: values out of range are rejected, naming the cell", "[state][i
     double value;
     const char *message;
   };
-  for (const Case &k : {Case{kStageArray, 2, "stage"}, Case{kStageArray, -1, "stage"},
-                        Case{kTagArray, 4, "tag"}, Case{kTagArray, 0.5, "tag"},
-                        Case{kOrderArray, 7, "permutation"}, Case{kOrderArray, NAN, "permutation"},
-                        Case{kMarkingArray, 9, kMarkingArray}}) {
+  for (const Case &k :
+       {Case{kStageArray, 2, "stage"}, Case{kStageArray, -1, "stage"}, Case{kTagArray, 4, "tag"},
+        Case{kTagArray, 0.5, "tag"}, Case{kOrderArray, 7, "permutation"},
+        Case{kOrderArray, NAN, "permutation"}, Case{kMarkingArray, 9, kMarkingArray}}) {
     Mesh m = base;
     array_named(m, k.array).values[array_named(m, k.array).components * 5] = k.value;
     INFO(k.array << " = " << k.value);
@@ -152,7 +160,8 @@ TEST_CASE("state: tampered order or connectivity is rejected or still refines co
     for (Marking marking : {Marking::Index, Marking::Longest, Marking::Sorted}) {
       Mesh base = refined(dim, marking, 2, 11);
       encode_state(base);
-      if (marking != Marking::Sorted) testing::to_legacy_state(base); // both encodings
+      if (marking != Marking::Sorted)
+        testing::to_legacy_state(base); // both encodings
       const int nv = dim + 1;
       for (int trial = 0; trial < 12; ++trial) {
         Mesh m = base;
@@ -162,7 +171,8 @@ TEST_CASE("state: tampered order or connectivity is rejected or still refines co
           // bisect:state: another vertex order (rank), same stage and tag.
           double &v = array_named(m, kStateArray).values[c];
           int nperm = 1;
-          for (int f = 2; f <= nv; ++f) nperm *= f;
+          for (int f = 2; f <= nv; ++f)
+            nperm *= f;
           const int w = int(v), r = w >> 4;
           const int r2 = (r + 1 + std::uniform_int_distribution<int>(0, nperm - 2)(rng)) % nperm;
           v = double(r2 * 16 + (w & 15));
@@ -170,10 +180,12 @@ TEST_CASE("state: tampered order or connectivity is rejected or still refines co
           DataArray &order = array_named(m, kOrderArray);
           auto first = order.values.begin() + std::ptrdiff_t(c * nv);
           std::vector<double> before(first, first + nv);
-          while (std::equal(before.begin(), before.end(), first)) std::shuffle(first, first + nv, rng);
+          while (std::equal(before.begin(), before.end(), first))
+            std::shuffle(first, first + nv, rng);
         } else {
           int i = std::uniform_int_distribution<int>(0, nv - 1)(rng), j = i;
-          while (j == i) j = std::uniform_int_distribution<int>(0, nv - 1)(rng);
+          while (j == i)
+            j = std::uniform_int_distribution<int>(0, nv - 1)(rng);
           std::swap(m.cell(CellId(c))[i], m.cell(CellId(c))[j]);
         }
         INFO("dim " << dim << ", marking " << marking_name(marking) << ", cell " << c << ", "
@@ -204,8 +216,8 @@ TEST_CASE("state: the 4D pair that skips Stage 1 is inconsistent, found before r
   Mesh m;
   m.dim = 4;
   m.coords = {0.1, 0.2, 0.1, 0.3, // 0, below the hyperplane of 1..4
-              0, 0, 0, 1,  1, 0, 0, 1,  0, 1, 0, 1,  0, 0, 1, 1.2,
-              0.2, 0.3, 0.2, 1.9}; // 5, above it
+              0,   0,   0,   1,   1, 0,   0,   1,   0,   1,
+              0,   1,   0,   0,   1, 1.2, 0.2, 0.3, 0.2, 1.9}; // 5, above it
   m.cells = {0, 1, 2, 3, 4, 1, 2, 3, 4, 5};
   prepare_input(m, "pair");
   m.marking = Marking::Index;
@@ -220,7 +232,8 @@ TEST_CASE("state: the 4D pair that skips Stage 1 is inconsistent, found before r
   // Refined as it is, the pair ends non-conforming...
   Mesh r = m;
   Invariants inv = measure_invariants(r);
-  for (int i = 0; i < 3; ++i) refine_uniform(r);
+  for (int i = 0; i < 3; ++i)
+    refine_uniform(r);
   REQUIRE_FALSE(check_conformity(r, &inv).ok);
   // ...so the state is rejected on reading.
   REQUIRE_THAT(check_state_consistency(m), Catch::Contains("cells 0 and 1"));

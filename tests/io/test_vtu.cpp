@@ -112,8 +112,8 @@ void require_clean_read_error(const std::string &path, const std::string &expect
 Mesh two_tets() {
   Mesh m;
   m.dim = 3;
-  m.coords = {0.1, 0.2, 0.3, 1.0 / 3.0, 0.0, 1e-300, 0.0, 2.0 / 7.0, 0.0,
-              0.0, 0.0, -1.7e5,     1.0, 1.0, 1.0};
+  m.coords = {0.1, 0.2, 0.3, 1.0 / 3.0, 0.0, 1e-300, 0.0, 2.0 / 7.0,
+              0.0, 0.0, 0.0, -1.7e5,    1.0, 1.0,    1.0};
   m.cells = {0, 1, 2, 3, 4, 3, 2, 1};
   m.point_data.push_back({"temperature", 1, {1.5, -2.25, 0.1, 1e10, std::numbers::pi}});
   m.point_data.push_back({"velocity", 2, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9.5}});
@@ -123,7 +123,9 @@ Mesh two_tets() {
   return m;
 }
 
-void require_same(const Mesh &a, const Mesh &b) { REQUIRE(testing::mesh_difference(a, b) == ""); }
+void require_same(const Mesh &a, const Mesh &b) {
+  REQUIRE(testing::mesh_difference(a, b) == "");
+}
 
 // A hand-written ASCII .vtu file (VTK's reference layout).
 struct AsciiVtu {

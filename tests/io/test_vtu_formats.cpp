@@ -47,7 +47,8 @@ namespace {
 
 std::string temp_file(const std::string &name) {
   static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("bisect_test_vtu_formats_" + std::to_string(::getpid()));
+    fs::path d =
+        fs::temp_directory_path() / ("bisect_test_vtu_formats_" + std::to_string(::getpid()));
     fs::create_directories(d);
     return d;
   }();
@@ -71,13 +72,15 @@ struct Case {
 
 template <class ArrayT>
 vtkSmartPointer<ArrayT> typed_array(const char *name, int components, const std::vector<double> &v,
-                                    std::vector<DataArray> *expected, std::string expected_name = "") {
+                                    std::vector<DataArray> *expected,
+                                    std::string expected_name = "") {
   auto a = vtkSmartPointer<ArrayT>::New();
   if (name)
     a->SetName(name);
   a->SetNumberOfComponents(components);
   a->SetNumberOfTuples(vtkIdType(v.size()) / components);
-  DataArray e{expected_name.empty() ? std::string(name ? name : "") : expected_name, components, {}};
+  DataArray e{
+      expected_name.empty() ? std::string(name ? name : "") : expected_name, components, {}};
   for (std::size_t i = 0; i < v.size(); ++i) {
     a->SetValue(vtkIdType(i), static_cast<typename ArrayT::ValueType>(v[i]));
     e.values.push_back(static_cast<double>(a->GetValue(vtkIdType(i))));
@@ -172,15 +175,21 @@ Case make_case(int dim, bool float_points) {
   return c;
 }
 
-void require_same(const Mesh &a, const Mesh &b) { REQUIRE(testing::mesh_difference(a, b) == ""); }
+void require_same(const Mesh &a, const Mesh &b) {
+  REQUIRE(testing::mesh_difference(a, b) == "");
+}
 
 enum class Mode { Ascii, Binary, AppendedRaw, AppendedBase64 };
 const char *mode_name(Mode m) {
   switch (m) {
-  case Mode::Ascii: return "ascii";
-  case Mode::Binary: return "binary";
-  case Mode::AppendedRaw: return "appended-raw";
-  default: return "appended-base64";
+  case Mode::Ascii:
+    return "ascii";
+  case Mode::Binary:
+    return "binary";
+  case Mode::AppendedRaw:
+    return "appended-raw";
+  default:
+    return "appended-base64";
   }
 }
 
@@ -200,8 +209,12 @@ std::string write_with_vtk(const Case &c, const Settings &s, const std::string &
   w->SetInputData(c.grid);
   w->SetFileName(path.c_str());
   switch (s.mode) {
-  case Mode::Ascii: w->SetDataModeToAscii(); break;
-  case Mode::Binary: w->SetDataModeToBinary(); break;
+  case Mode::Ascii:
+    w->SetDataModeToAscii();
+    break;
+  case Mode::Binary:
+    w->SetDataModeToBinary();
+    break;
   case Mode::AppendedRaw:
     w->SetDataModeToAppended();
     w->EncodeAppendedDataOff();
@@ -212,10 +225,18 @@ std::string write_with_vtk(const Case &c, const Settings &s, const std::string &
     break;
   }
   switch (s.compressor) {
-  case 0: w->SetCompressorTypeToNone(); break;
-  case 1: w->SetCompressorTypeToZLib(); break;
-  case 2: w->SetCompressorTypeToLZ4(); break;
-  default: w->SetCompressorTypeToLZMA(); break;
+  case 0:
+    w->SetCompressorTypeToNone();
+    break;
+  case 1:
+    w->SetCompressorTypeToZLib();
+    break;
+  case 2:
+    w->SetCompressorTypeToLZ4();
+    break;
+  default:
+    w->SetCompressorTypeToLZMA();
+    break;
   }
   if (s.header64)
     w->SetHeaderTypeToUInt64();
@@ -246,8 +267,8 @@ Mesh repeated(const Mesh &m, int pieces) {
     for (VertexId v : m.cells)
       out.cells.push_back(v + VertexId(p) * nv);
     for (std::size_t i = 0; i < m.point_data.size(); ++i)
-      out.point_data[i].values.insert(out.point_data[i].values.end(), m.point_data[i].values.begin(),
-                                      m.point_data[i].values.end());
+      out.point_data[i].values.insert(out.point_data[i].values.end(),
+                                      m.point_data[i].values.begin(), m.point_data[i].values.end());
     for (std::size_t i = 0; i < m.cell_data.size(); ++i)
       out.cell_data[i].values.insert(out.cell_data[i].values.end(), m.cell_data[i].values.begin(),
                                      m.cell_data[i].values.end());
@@ -336,8 +357,12 @@ std::string triangle_file(const std::string &point_data, const std::string &cell
                           const std::string &piece_attrs = "NumberOfPoints='3' NumberOfCells='1'") {
   return "<?xml version='1.0' encoding='utf-8'?>\n<!-- written by hand -->\n"
          "<VTKFile type='UnstructuredGrid' version='2.2' byte_order='LittleEndian'>\n"
-         "<UnstructuredGrid><!-- a comment -->\n<Piece " + piece_attrs + ">\n"
-         "<PointData>" + point_data + "</PointData><CellData>" + cell_data + "</CellData>\n"
+         "<UnstructuredGrid><!-- a comment -->\n<Piece " +
+         piece_attrs +
+         ">\n"
+         "<PointData>" +
+         point_data + "</PointData><CellData>" + cell_data +
+         "</CellData>\n"
          "<Points><DataArray type='Float32' NumberOfComponents='3' format='ascii'>"
          "0 0 0 1 0 0 0 1 0</DataArray></Points>\n"
          "<Cells><DataArray type='Int32' Name='connectivity'>0 1 2</DataArray>"
@@ -371,14 +396,14 @@ TEST_CASE("vtu formats: comments, single quotes and unnamed arrays numbered as V
   CHECK(m.cell_data[0].values == std::vector<double>{18446744073709551615.0});
 }
 
-TEST_CASE("vtu formats: integer arrays hold integers of their type, named in the error",
-          "[io]") {
+TEST_CASE("vtu formats: integer arrays hold integers of their type, named in the error", "[io]") {
   const auto cell = [](const std::string &type, const std::string &value) {
     return triangle_file("", "<DataArray type='" + type + "' Name='m' format='ascii'>" + value +
                                  "</DataArray>");
   };
-  CHECK_THAT(read_error(cell("Int32", "nan")),
-             Catch::Contains("cell data array 'm': value 0 ('nan') is not an integer of type Int32"));
+  CHECK_THAT(
+      read_error(cell("Int32", "nan")),
+      Catch::Contains("cell data array 'm': value 0 ('nan') is not an integer of type Int32"));
   CHECK_THAT(read_error(cell("UInt8", "-1")), Catch::Contains("('-1') is out of range for UInt8"));
   CHECK_THAT(read_error(cell("Int8", "128")), Catch::Contains("('128') is out of range for Int8"));
   CHECK_THAT(read_error(cell("Float32", "1e39")), Catch::Contains("is out of range for Float32"));
@@ -389,8 +414,7 @@ TEST_CASE("vtu formats: integer arrays hold integers of their type, named in the
   CHECK_THAT(read_error(cell("Int33", "1")), Catch::Contains("unknown type 'Int33'"));
 }
 
-TEST_CASE("vtu formats: sizes claimed far beyond the file are refused before allocating",
-          "[io]") {
+TEST_CASE("vtu formats: sizes claimed far beyond the file are refused before allocating", "[io]") {
   CHECK_THAT(read_error(triangle_file("", "", "NumberOfPoints='4000000000' NumberOfCells='1'")),
              Catch::Contains("Points: has 9 values, expected 12000000000"));
   CHECK_THAT(read_error(triangle_file("", "", "NumberOfPoints='3000000000000' NumberOfCells='1'")),
@@ -402,7 +426,8 @@ TEST_CASE("vtu formats: sizes claimed far beyond the file are refused before all
   std::string text = triangle_file("", "<DataArray type='Int32' Name='m' format='binary'>" + huge +
                                            "AQAAAA==</DataArray>");
   text.replace(text.find("version='2.2'"), 13, "version='1.0' header_type='UInt64'");
-  CHECK_THAT(read_error(text), Catch::Contains("cell data array 'm': header claims 4611686018427387904 bytes"));
+  CHECK_THAT(read_error(text),
+             Catch::Contains("cell data array 'm': header claims 4611686018427387904 bytes"));
 }
 
 TEST_CASE("vtu formats: malformed XML is refused with the byte offset", "[io]") {
@@ -421,7 +446,8 @@ TEST_CASE("vtu formats: malformed XML is refused with the byte offset", "[io]") 
 }
 
 TEST_CASE("vtu formats: pieces with different arrays are refused", "[io]") {
-  std::string text = triangle_file("<DataArray type='Float64' Name='p' format='ascii'>1 2 3</DataArray>", "");
+  std::string text =
+      triangle_file("<DataArray type='Float64' Name='p' format='ascii'>1 2 3</DataArray>", "");
   const std::size_t b = text.find("<Piece"), e = text.find("</Piece>") + 8;
   std::string second = text.substr(b, e - b);
   second.replace(second.find("Name='p'"), 8, "Name='q'");

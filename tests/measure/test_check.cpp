@@ -3,8 +3,8 @@
 #include "bisect/generate.hpp"
 #include "bisect/io.hpp"
 #include "bisect/mark.hpp"
-#include "bisect/refine.hpp"
 #include "bisect/measure.hpp"
+#include "bisect/refine.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -418,9 +418,9 @@ TEST_CASE("check: two tets that split their shared face differently, without a h
   // MBN, AMC, MNC; below into MBN, AMN, ANC: the same five vertices, no vertex
   // on a facet of the other side, but AMC/MNC and AMN/ANC do not match.
   // Bisection can make this: AB then BC on one side, BC then AB on the other.
-  const std::vector<double> xyz = {0, 0, 0,   1, 0, 0,   0, 1, 0,    // A B C
-                                   0.5, 0, 0, 0.5, 0.5, 0,           // M N
-                                   0.3, 0.3, 1, 0.3, 0.3, -1};       // P Q
+  const std::vector<double> xyz = {0,   0,   0, 1,   0,   0, 0, 1, 0, // A B C
+                                   0.5, 0,   0, 0.5, 0.5, 0,          // M N
+                                   0.3, 0.3, 1, 0.3, 0.3, -1};        // P Q
   enum : VertexId { A, B, C, M, N, P, Q };
   const Mesh original = make_mesh(3, xyz, {A, B, C, P, A, B, C, Q});
   const Invariants before = measure_invariants(original);
@@ -463,7 +463,8 @@ TEST_CASE("final check: check_refined catches a hanging node, a split face, a de
   // The hand-made hanging hypotenuse midpoint (2D).
   const Mesh square = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1}, {0, 1, 2, 0, 2, 3});
   const Invariants sq = measure_invariants(square, false);
-  const Mesh hanging = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 0.5, 0.5}, {0, 1, 4, 1, 2, 4, 0, 2, 3});
+  const Mesh hanging =
+      make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 0.5, 0.5}, {0, 1, 4, 1, 2, 4, 0, 2, 3});
   CHECK_THAT(check_refined(hanging, sq).failure, StartsWith("boundary measure changed"));
   // A degenerate cell, and an inverted one (folded across the diagonal).
   const Mesh flat = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 0.5, 0.5}, {0, 1, 2, 0, 2, 3, 0, 4, 2});
@@ -471,15 +472,15 @@ TEST_CASE("final check: check_refined catches a hanging node, a split face, a de
   const Mesh folded = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 0.8, 0.3}, {0, 1, 2, 0, 2, 4});
   CHECK_THAT(check_refined(folded, sq).failure, Contains("overlap"));
   // The face split differently from its two sides (3D), no hanging node.
-  const std::vector<double> xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 0, 0, 0.5, 0.5, 0,
-                                   0.3, 0.3, 1, 0.3, 0.3, -1};
+  const std::vector<double> xyz = {0, 0,   0,   1, 0,   0,   0, 1,   0,   0.5, 0,
+                                   0, 0.5, 0.5, 0, 0.3, 0.3, 1, 0.3, 0.3, -1};
   enum : VertexId { A, B, C, M, N, P, Q };
   const Invariants two = measure_invariants(make_mesh(3, xyz, {A, B, C, P, A, B, C, Q}), false);
-  const Mesh split = make_mesh(3, xyz, {P, M, B, N, P, A, M, C, P, M, N, C,
-                                        Q, M, B, N, Q, A, M, N, Q, A, N, C});
+  const Mesh split =
+      make_mesh(3, xyz, {P, M, B, N, P, A, M, C, P, M, N, C, Q, M, B, N, Q, A, M, N, Q, A, N, C});
   CHECK_THAT(check_refined(split, two).failure, StartsWith("boundary measure changed"));
-  const Mesh alike = make_mesh(3, xyz, {P, M, B, N, P, A, M, C, P, M, N, C,
-                                        Q, M, B, N, Q, A, M, C, Q, M, N, C});
+  const Mesh alike =
+      make_mesh(3, xyz, {P, M, B, N, P, A, M, C, P, M, N, C, Q, M, B, N, Q, A, M, C, Q, M, N, C});
   CHECK(check_refined(alike, two).ok);
   // Honest refinements pass.
   for (int dim : {2, 3, 4}) {

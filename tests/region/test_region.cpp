@@ -715,11 +715,13 @@ TEST_CASE("sphere: a sphere far smaller than a cell selects the cell holding its
     for (double offset : {0.0, 1e6, -3e9}) {
       // One simplex of size ~1 at the offset, the centre at its centroid.
       std::vector<double> verts(std::size_t((dim + 1) * dim), offset);
-      for (int i = 1; i <= dim; ++i) verts[std::size_t(i * dim + i - 1)] += 1.0;
+      for (int i = 1; i <= dim; ++i)
+        verts[std::size_t(i * dim + i - 1)] += 1.0;
       verts[std::size_t(dim)] += 0.25; // not a right-angled corner
       std::vector<double> c(std::size_t(dim), 0.0);
       for (int i = 0; i <= dim; ++i)
-        for (int k = 0; k < dim; ++k) c[std::size_t(k)] += verts[std::size_t(i * dim + k)] / (dim + 1);
+        for (int k = 0; k < dim; ++k)
+          c[std::size_t(k)] += verts[std::size_t(i * dim + k)] / (dim + 1);
       for (double r : {1e-3, 1e-9, 1e-15, 1e-100, 1e-300})
         for (bool solid : {false, true}) {
           std::string spec = R"({"type": "sphere", "center": [)";
@@ -736,7 +738,8 @@ TEST_CASE("sphere: a sphere far smaller than a cell selects the cell holding its
           CHECK(region->touches(verts.data(), dim));
           // A cell beside it (the simplex moved by 2 along x) is not selected.
           std::vector<double> far = verts;
-          for (int i = 0; i <= dim; ++i) far[std::size_t(i * dim)] += 2.0;
+          for (int i = 0; i <= dim; ++i)
+            far[std::size_t(i * dim)] += 2.0;
           CHECK_FALSE(region->touches(far.data(), dim));
         }
     }

@@ -38,23 +38,29 @@ VertexId corrupt_one_bisection(Mesh &mesh, std::size_t first_new) {
     std::map<std::pair<VertexId, VertexId>, std::vector<std::pair<CellId, CellId>>> pairs;
     for (std::size_t i = 0; i < cells.size(); ++i)
       for (std::size_t j = 0; j < cells.size(); ++j) {
-        if (i == j) continue;
+        if (i == j)
+          continue;
         const VertexId *x = mesh.cell(cells[i]), *y = mesh.cell(cells[j]);
         int only_x = -1, missing = 0;
         for (int p = 0; p < n; ++p)
-          if (std::find(y, y + n, x[p]) == y + n) only_x = p, ++missing;
-        if (missing != 1) continue;
+          if (std::find(y, y + n, x[p]) == y + n)
+            only_x = p, ++missing;
+        if (missing != 1)
+          continue;
         VertexId b = kNoVertex;
         for (int p = 0; p < n; ++p)
-          if (std::find(x, x + n, y[p]) == x + n) b = y[p];
+          if (std::find(x, x + n, y[p]) == x + n)
+            b = y[p];
         const VertexId va = x[only_x];
         bool midpoint = true;
         for (int d = 0; d < dim; ++d)
           midpoint &= mesh.point(VertexId(z))[d] == 0.5 * (mesh.point(va)[d] + mesh.point(b)[d]);
-        if (midpoint && va < b) pairs[{va, b}].push_back({cells[i], cells[j]});
+        if (midpoint && va < b)
+          pairs[{va, b}].push_back({cells[i], cells[j]});
       }
     for (const auto &[edge, list] : pairs) {
-      if (list.size() < 2) continue; // one parent only: merging would leave no hanging node
+      if (list.size() < 2)
+        continue; // one parent only: merging would leave no hanging node
       const auto [keep, drop] = list.front();
       VertexId *x = mesh.cell(CellId(keep));
       std::replace(x, x + n, VertexId(z), edge.second); // (z, a, rest) -> (b, a, rest)

@@ -17,22 +17,30 @@ namespace bisect::testing {
 // "" when a and b hold the same mesh (dimension, coordinates, cells, and the
 // same arrays in the same order), else what differs first.
 inline std::string mesh_difference(const Mesh &a, const Mesh &b) {
-  if (a.dim != b.dim) return "dimension";
-  if (a.coords != b.coords) return "coordinates";
-  if (a.cells != b.cells) return "cells";
+  if (a.dim != b.dim)
+    return "dimension";
+  if (a.coords != b.coords)
+    return "coordinates";
+  if (a.cells != b.cells)
+    return "cells";
   auto arrays = [](const std::vector<DataArray> &x, const std::vector<DataArray> &y,
                    const char *kind) -> std::string {
-    if (x.size() != y.size()) return std::string(kind) + " array count";
+    if (x.size() != y.size())
+      return std::string(kind) + " array count";
     for (std::size_t i = 0; i < x.size(); ++i)
-      if (x[i].name != y[i].name || x[i].components != y[i].components || x[i].values != y[i].values)
+      if (x[i].name != y[i].name || x[i].components != y[i].components ||
+          x[i].values != y[i].values)
         return std::string(kind) + " array '" + x[i].name + "'";
     return {};
   };
-  if (std::string d = arrays(a.point_data, b.point_data, "point"); !d.empty()) return d;
+  if (std::string d = arrays(a.point_data, b.point_data, "point"); !d.empty())
+    return d;
   return arrays(a.cell_data, b.cell_data, "cell");
 }
 
-inline std::string data_path(const std::string &name) { return std::string(BISECT_DATA_DIR) + "/" + name; }
+inline std::string data_path(const std::string &name) {
+  return std::string(BISECT_DATA_DIR) + "/" + name;
+}
 
 // Renumbers vertices by a random permutation (cells keep their shape).
 inline Mesh renumbered(const Mesh &in, std::uint64_t seed) {
@@ -43,12 +51,15 @@ inline Mesh renumbered(const Mesh &in, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::shuffle(perm.begin(), perm.end(), rng);
   for (std::size_t v = 0; v < nv; ++v)
-    std::copy(in.point(VertexId(v)), in.point(VertexId(v)) + in.dim, m.coords.begin() + perm[v] * in.dim);
-  for (VertexId &x : m.cells) x = perm[x];
+    std::copy(in.point(VertexId(v)), in.point(VertexId(v)) + in.dim,
+              m.coords.begin() + perm[v] * in.dim);
+  for (VertexId &x : m.cells)
+    x = perm[x];
   for (DataArray &a : m.point_data)
     for (std::size_t v = 0; v < nv; ++v)
       for (int k = 0; k < a.components; ++k)
-        a.values[perm[v] * a.components + k] = in.point_data[&a - m.point_data.data()].values[v * a.components + k];
+        a.values[perm[v] * a.components + k] =
+            in.point_data[&a - m.point_data.data()].values[v * a.components + k];
   return m;
 }
 
@@ -69,8 +80,10 @@ inline Mesh perturbed_inside_box(const Mesh &in, double amount, std::uint64_t se
     bool on_box = false;
     for (int k = 0; k < d; ++k)
       on_box |= in.point(VertexId(v))[k] == lo[k] || in.point(VertexId(v))[k] == hi[k];
-    if (on_box) continue;
-    for (int k = 0; k < d; ++k) m.coords[v * d + k] += u(rng);
+    if (on_box)
+      continue;
+    for (int k = 0; k < d; ++k)
+      m.coords[v * d + k] += u(rng);
   }
   return m;
 }
@@ -81,14 +94,16 @@ inline Mesh perturbed_inside_box(const Mesh &in, double amount, std::uint64_t se
 inline void to_legacy_state(Mesh &m) {
   auto it = std::find_if(m.cell_data.begin(), m.cell_data.end(),
                          [](const DataArray &a) { return a.name == kStateArray; });
-  if (it == m.cell_data.end()) return;
+  if (it == m.cell_data.end())
+    return;
   const int nv = m.dim + 1;
   DataArray order{kOrderArray, nv, {}}, stage{kStageArray, 1, {}}, tag{kTagArray, 1, {}};
   for (double v : it->values) {
     const int w = int(v);
     int p[5];
     permutation_of_rank(w >> 4, nv, p);
-    for (int i = 0; i < nv; ++i) order.values.push_back(p[i]);
+    for (int i = 0; i < nv; ++i)
+      order.values.push_back(p[i]);
     stage.values.push_back((w >> 3) & 1);
     tag.values.push_back(w & 7);
   }
@@ -104,7 +119,7 @@ inline void to_legacy_state(Mesh &m) {
 // first failure.
 #define REQUIRE_CONFORMING(mesh, inv)                                                              \
   do {                                                                                             \
-    const ::bisect::CheckResult check_result_ = ::bisect::check_conformity((mesh), &(inv));       \
+    const ::bisect::CheckResult check_result_ = ::bisect::check_conformity((mesh), &(inv));        \
     INFO(check_result_.failure);                                                                   \
     REQUIRE(check_result_.ok);                                                                     \
   } while (0)

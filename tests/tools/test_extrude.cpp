@@ -22,8 +22,10 @@ Mesh l_shaped() {
     double pts[12];
     cell_points(full, CellId(c), pts);
     bool corner = true;
-    for (int k = 0; k < 3; ++k) corner = corner && (pts[k] + pts[3 + k] + pts[6 + k] + pts[9 + k]) / 4 > 0.5;
-    if (!corner) m.cells.insert(m.cells.end(), full.cell(CellId(c)), full.cell(CellId(c)) + 4);
+    for (int k = 0; k < 3; ++k)
+      corner = corner && (pts[k] + pts[3 + k] + pts[6 + k] + pts[9 + k]) / 4 > 0.5;
+    if (!corner)
+      m.cells.insert(m.cells.end(), full.cell(CellId(c)), full.cell(CellId(c)) + 4);
   }
   return m;
 }
@@ -33,7 +35,8 @@ Mesh l_shaped() {
 TEST_CASE("Extruding a Kuhn cube fills the unit hypercube conformingly", "[extrude][4d]") {
   Mesh m3 = generate_kuhn(3, 2);
   m3.point_data.push_back({"id", 1, {}});
-  for (std::size_t v = 0; v < m3.num_vertices(); ++v) m3.point_data[0].values.push_back(double(v));
+  for (std::size_t v = 0; v < m3.num_vertices(); ++v)
+    m3.point_data[0].values.push_back(double(v));
   Mesh m = extrude_delaunay(m3, {0, 0.5, 1});
   REQUIRE(m.dim == 4);
   REQUIRE(m.num_vertices() == 3 * m3.num_vertices());
@@ -41,7 +44,8 @@ TEST_CASE("Extruding a Kuhn cube fills the unit hypercube conformingly", "[extru
   for (std::size_t s = 0; s < 3; ++s)
     for (std::size_t v = 0; v < m3.num_vertices(); ++v) {
       const double *p = m.point(VertexId(s * m3.num_vertices() + v));
-      for (int k = 0; k < 3; ++k) REQUIRE(p[k] == m3.point(VertexId(v))[k]);
+      for (int k = 0; k < 3; ++k)
+        REQUIRE(p[k] == m3.point(VertexId(v))[k]);
       REQUIRE(p[3] == 0.5 * double(s));
       REQUIRE(m.point_data[0].values[s * m3.num_vertices() + v] == double(v));
     }
@@ -59,7 +63,8 @@ TEST_CASE("Extruding a Kuhn cube fills the unit hypercube conformingly", "[extru
   REQUIRE(inv.euler == 1);
 }
 
-TEST_CASE("Extruding a perturbed convex mesh is conforming with the prism volume", "[extrude][4d]") {
+TEST_CASE("Extruding a perturbed convex mesh is conforming with the prism volume",
+          "[extrude][4d]") {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     Mesh m3 = testing::perturbed_inside_box(generate_kuhn(3, 3), 0.05, seed);
     Mesh m = extrude_delaunay(m3, {-0.5, 0.25, 0.5, 1.5});
@@ -89,7 +94,8 @@ TEST_CASE("Local refinement of an extruded Kuhn cube stays conforming", "[extrud
   prepare_input(m, "extruded");
   mark_mesh(m, Marking::Longest);
   Invariants inv = measure_invariants(m);
-  auto region = parse_region(R"({"type":"sphere","center":[0.5,0.5,0.5,0.5],"radius":0.3})", 4, "t");
+  auto region =
+      parse_region(R"({"type":"sphere","center":[0.5,0.5,0.5,0.5],"radius":0.3})", 4, "t");
   for (int it = 1; it <= 4; ++it) {
     refine(m, select_cells(m, *region));
     INFO("iteration " << it);

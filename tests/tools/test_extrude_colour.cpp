@@ -6,12 +6,12 @@
 #include "bisect/generate.hpp"
 #include "bisect/io.hpp"
 #include "bisect/mark.hpp"
-#include "bisect/state.hpp"
 #include "bisect/measure.hpp"
-#include "core/numbering.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
 #include "bisect/slice.hpp"
+#include "bisect/state.hpp"
+#include "core/numbering.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -330,8 +330,9 @@ TEST_CASE("extrusion by colour: the state survives a .vtu round trip and refine 
   REQUIRE(r.cells == m.cells);
 }
 
-TEST_CASE("label arrays (colour, slice) are not averaged: refinement and slicing mark new vertices -1",
-          "[extrude][colour][4d][slice]") {
+TEST_CASE(
+    "label arrays (colour, slice) are not averaged: refinement and slicing mark new vertices -1",
+    "[extrude][colour][4d][slice]") {
   Mesh in = testing::renumbered(generate_kuhn(3, 2), 9);
   Colouring c = colour_mesh(in);
   REQUIRE(c.ok);
@@ -344,7 +345,8 @@ TEST_CASE("label arrays (colour, slice) are not averaged: refinement and slicing
   const std::size_t nv0 = m.num_vertices();
   auto array = [](const Mesh &mesh, const std::string &name) -> const DataArray & {
     for (const DataArray &a : mesh.point_data)
-      if (a.name == name) return a;
+      if (a.name == name)
+        return a;
     FAIL("no point array " << name);
     throw;
   };
@@ -419,7 +421,8 @@ TEST_CASE("extrusion by colour: one prism refined uniformly has at most 384 clas
           "[extrude][colour][4d][quality]") {
   // The cartesian tet's dyadic edge ratios once fell halfway between two
   // steps of similarity_key's rounding grid (387 "classes"): kept as a check.
-  for (SimplexShape shape : {SimplexShape::Random, SimplexShape::Equilateral, SimplexShape::Cartesian}) {
+  for (SimplexShape shape :
+       {SimplexShape::Random, SimplexShape::Equilateral, SimplexShape::Cartesian}) {
     Mesh tet = generate_simplex(3, shape, 3);
     Mesh m = extrude_by_propagation(tet, {0.0, 0.8});
     DataArray origin{"origin", 1, {0, 1, 2, 3}};
@@ -446,7 +449,9 @@ TEST_CASE("extrusion by colour: one prism refined uniformly has at most 384 clas
       REQUIRE(classes[k].size() <= 384);
     }
     std::cout << "one extruded prism ("
-              << (shape == SimplexShape::Random ? "random" : shape == SimplexShape::Equilateral ? "equilateral" : "cartesian")
+              << (shape == SimplexShape::Random        ? "random"
+                  : shape == SimplexShape::Equilateral ? "equilateral"
+                                                       : "cartesian")
               << " tet): classes per pentatope " << classes[0].size() << ", " << classes[1].size()
               << ", " << classes[2].size() << ", " << classes[3].size() << "\n";
     // Maubach's cycle: the minimum quality repeats every 4 generations once

@@ -4,10 +4,10 @@
 #include "bisect/check.hpp"
 #include "bisect/generate.hpp"
 #include "bisect/mark.hpp"
-#include "bisect/state.hpp"
 #include "bisect/measure.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
+#include "bisect/state.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -37,7 +37,8 @@ void require_valid_slice(const Mesh &s) {
     double pts[12];
     cell_points(s, CellId(c), pts);
     REQUIRE(signed_volume(pts, 3) > 0);
-    for (int i = 0; i < 4; ++i) used[s.cell(CellId(c))[i]] = true;
+    for (int i = 0; i < 4; ++i)
+      used[s.cell(CellId(c))[i]] = true;
   }
   REQUIRE(std::count(used.begin(), used.end(), false) == 0);
 }
@@ -53,7 +54,8 @@ void require_unit_cube_section(const Mesh &s) {
 
 } // namespace
 
-TEST_CASE("slice: sections of Kuhn hypercubes are conforming unit cubes on every axis", "[slice][4d]") {
+TEST_CASE("slice: sections of Kuhn hypercubes are conforming unit cubes on every axis",
+          "[slice][4d]") {
   for (int k : {1, 2, 3}) {
     const Mesh m = generate_kuhn(4, k);
     for (int axis = 0; axis < 4; ++axis) {
@@ -66,7 +68,8 @@ TEST_CASE("slice: sections of Kuhn hypercubes are conforming unit cubes on every
   }
 }
 
-TEST_CASE("slice: a hyperplane through interior facets produces each in-plane tet once", "[slice][4d]") {
+TEST_CASE("slice: a hyperplane through interior facets produces each in-plane tet once",
+          "[slice][4d]") {
   // At t = 0.5 with k = 2 whole tetrahedral facets lie in the plane; the
   // slice has as many cells as the 3D Kuhn mesh of the same grid (2^3 * 6).
   const Mesh s = slice_mesh(generate_kuhn(4, 2), 3, 0.5);
@@ -90,8 +93,10 @@ TEST_CASE("slice: sections of a locally refined 4D mesh are conforming unit cube
   for (Marking mk : {Marking::Longest, Marking::Index}) {
     Mesh m = generate_kuhn(4, 2);
     mark_mesh(m, mk);
-    auto region = parse_region(R"({"type":"sphere","center":[0.5,0.5,0.5,0.5],"radius":0.3})", 4, "t");
-    for (int it = 0; it < 4; ++it) refine(m, select_cells(m, *region));
+    auto region =
+        parse_region(R"({"type":"sphere","center":[0.5,0.5,0.5,0.5],"radius":0.3})", 4, "t");
+    for (int it = 0; it < 4; ++it)
+      refine(m, select_cells(m, *region));
     REQUIRE(m.num_cells() > 384);
     // t = 0.25 meets every side pattern, the square pyramid (2,1,2) included.
     // A volume and boundary measure of the unit cube also catch quads cut by
@@ -100,7 +105,8 @@ TEST_CASE("slice: sections of a locally refined 4D mesh are conforming unit cube
       INFO("marking " << marking_name(mk) << " t " << t);
       require_unit_cube_section(slice_mesh(m, 3, t));
     }
-    for (int axis = 0; axis < 3; ++axis) require_unit_cube_section(slice_mesh(m, axis, 0.45));
+    for (int axis = 0; axis < 3; ++axis)
+      require_unit_cube_section(slice_mesh(m, axis, 0.45));
   }
 }
 
@@ -128,7 +134,8 @@ TEST_CASE("slice: linear point data is reproduced exactly at the cut points", "[
   }
   m.point_data.push_back(lin);
   m.cell_data.push_back({"id", 1, {}});
-  for (std::size_t c = 0; c < m.num_cells(); ++c) m.cell_data[0].values.push_back(double(c));
+  for (std::size_t c = 0; c < m.num_cells(); ++c)
+    m.cell_data[0].values.push_back(double(c));
 
   for (int axis = 0; axis < 4; ++axis)
     for (double value : {0.3, 0.5}) {
@@ -138,7 +145,8 @@ TEST_CASE("slice: linear point data is reproduced exactly at the cut points", "[
       REQUIRE(s.point_data[0].values.size() == 2 * s.num_vertices());
       for (std::size_t v = 0; v < s.num_vertices(); ++v) {
         double x[4];
-        for (int d = 0, j = 0; d < 4; ++d) x[d] = d == axis ? value : s.point(VertexId(v))[j++];
+        for (int d = 0, j = 0; d < 4; ++d)
+          x[d] = d == axis ? value : s.point(VertexId(v))[j++];
         REQUIRE(s.point_data[0].values[2 * v] == Approx(f(x)).margin(1e-12));
         REQUIRE(s.point_data[0].values[2 * v + 1] == Approx(-f(x)).margin(1e-12));
       }
@@ -163,7 +171,8 @@ TEST_CASE("slice: bisection state arrays are not copied to the slice", "[slice][
   mark_mesh(m, Marking::Index);
   encode_state(m);
   const Mesh s = slice_mesh(m, 3, 0.5);
-  for (const DataArray &a : s.cell_data) REQUIRE(a.name.rfind("bisect:", 0) != 0);
+  for (const DataArray &a : s.cell_data)
+    REQUIRE(a.name.rfind("bisect:", 0) != 0);
 }
 
 TEST_CASE("slice: a hyperplane missing the mesh gives an empty 3D mesh", "[slice][4d]") {
@@ -184,16 +193,20 @@ TEST_CASE("slice: bad axis or a mesh that is not 3D or 4D is rejected", "[slice]
   REQUIRE_THROWS_AS(slice_mesh(generate_kuhn(2, 1), 1, 0.5), InputError);
 }
 
-TEST_CASE("slice: sections of locally refined 3D (2D+t) meshes are conforming unit squares", "[slice][3d]") {
+TEST_CASE("slice: sections of locally refined 3D (2D+t) meshes are conforming unit squares",
+          "[slice][3d]") {
   // Planes through the interior, through vertices of the initial mesh (in-plane
   // triangles must appear once) and through midpoints made by refinement.
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     for (Marking mk : {Marking::Longest, Marking::Sorted}) {
-      Mesh m = testing::renumbered(testing::perturbed_inside_box(generate_kuhn(3, 3), 0.05, seed), seed);
+      Mesh m =
+          testing::renumbered(testing::perturbed_inside_box(generate_kuhn(3, 3), 0.05, seed), seed);
       prepare_input(m, "kuhn");
       mark_mesh(m, mk);
-      auto region = parse_region(R"({"type":"sphere","center":[0.4,0.5,0.45],"radius":0.3})", 3, "r");
-      for (int it = 0; it < 5; ++it) refine(m, select_cells(m, *region));
+      auto region =
+          parse_region(R"({"type":"sphere","center":[0.4,0.5,0.45],"radius":0.3})", 3, "r");
+      for (int it = 0; it < 5; ++it)
+        refine(m, select_cells(m, *region));
       for (int axis = 0; axis < 3; ++axis)
         for (double v : {0.0, 0.2, 0.5, 0.55, 1.0}) {
           Mesh s = slice_mesh(m, axis, v);
