@@ -77,10 +77,10 @@ int run_coarsen(const CoarsenArgs &a) {
   auto on_pass = [&](const CoarsenPass &p) {
     if (!quiet) {
       char buf[256];
-      std::snprintf(buf, sizeof buf, "pass %d%s: %s cells, %s vertices removed, %.2f s\n", p.pass,
+      std::snprintf(buf, sizeof buf, "pass %d%s: %s cells, %s %s removed, %.2f s\n", p.pass,
                     a.passes ? ("/" + std::to_string(a.passes)).c_str() : "",
                     with_commas(p.cells).c_str(), with_commas(p.removed_vertices).c_str(),
-                    seconds_since(t_pass));
+                    p.removed_vertices == 1 ? "vertex" : "vertices", seconds_since(t_pass));
       std::cerr << buf;
     }
     t_pass = std::chrono::steady_clock::now();
