@@ -78,6 +78,25 @@ std::vector<double> parse_slices(const std::string &text);
 int write_generated(Mesh mesh, const std::string &out, bool force, const CommonFlags &flags,
                     std::vector<std::string> inputs = {});
 
+// Runs f(); an input error it throws about no file in particular (library
+// functions that work on a mesh in memory) is rethrown naming `file`, the
+// file the mesh came from.
+template <class F> auto about_file(const std::string &file, F &&f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const InputError &e) {
+    if (!e.file.empty())
+      throw;
+    throw InputError(file, e.what());
+  }
+}
+
+// colour.cpp, for extrude --method colouring too: reads a 2D or 3D mesh,
+// and finds (or checks) its colouring; `how` says which (see colour.cpp).
+Mesh read_colourable(const std::string &path, const char *command);
+std::vector<std::uint8_t> colouring_of(Mesh &mesh, const std::string &path, bool barycentric,
+                                       bool recompute, std::string &how);
+
 // Prints `j` on stdout as one line.
 void print_json(const nlohmann::json &j);
 

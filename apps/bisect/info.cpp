@@ -1,4 +1,4 @@
-// bisect info, check, quality: what a mesh is, whether it conforms, how good it is.
+// bisect info: what a mesh is.
 #include "cli.hpp"
 
 #include <algorithm>
@@ -88,91 +88,6 @@ int run_info(const InfoArgs &a) {
   return kExitOk;
 }
 
-struct CheckArgs {
-  std::string input, against;
-  CommonFlags flags;
-};
-
-int run_check(const CheckArgs &a) {
-  const std::string &path = a.input;
-  Mesh mesh = read_mesh(path);
-  prepare_input(mesh, path);
-  Invariants original;
-  const Invariants *orig = nullptr;
-  if (!a.against.empty()) {
-    Mesh o = read_mesh(a.against);
-    prepare_input(o, a.against);
-    if (o.dim != mesh.dim)
-      throw InputError(a.against, "dimension " + std::to_string(o.dim) + " differs from " + path +
-                                      "'s " + std::to_string(mesh.dim));
-    original = measure_invariants(o);
-    orig = &original;
-  }
-  const CheckResult r = check_conformity(mesh, orig);
-  if (a.flags.json)
-    print_json({{"file", path},
-                {"against", orig ? nlohmann::json(a.against) : nlohmann::json()},
-                {"cells", mesh.num_cells()},
-                {"conforming", r.ok},
-                {"failure", r.ok ? nlohmann::json() : nlohmann::json(r.failure)}});
-  if (!r.ok) {
-    if (!a.flags.quiet)
-      std::cerr << "bisect: " << path << ": check failed: " << r.failure << "\n";
-    return kExitCheck;
-  }
-  if (!a.flags.json && !a.flags.quiet)
-    std::cout << path << ": conforming (" << mesh.num_cells() << " cells"
-              << (orig ? ", volume, boundary and Euler characteristic match " + a.against
-                       : std::string())
-              << ")\n";
-  return kExitOk;
-}
-
-struct QualityArgs {
-  std::string input;
-  bool classes = false;
-  int bins = 10;
-  CommonFlags flags;
-};
-
-int run_quality(const QualityArgs &a) {
-  Mesh mesh = read_mesh(a.input);
-  prepare_input(mesh, a.input);
-  const int bins = a.bins;
-  std::vector<std::size_t> hist(std::size_t(bins), 0);
-  double pts[5 * 4];
-  double qmin = 1, qmax = 0, sum = 0;
-  for (std::size_t c = 0; c < mesh.num_cells(); ++c) {
-    cell_points(mesh, CellId(c), pts);
-    const double q = mean_ratio(pts, mesh.dim);
-    qmin = std::min(qmin, q);
-    qmax = std::max(qmax, q);
-    sum += q;
-    hist[std::min<std::size_t>(std::size_t(q * bins), std::size_t(bins - 1))]++;
-  }
-  const double mean = mesh.num_cells() ? sum / double(mesh.num_cells()) : 0.0;
-  if (a.flags.json) {
-    nlohmann::json j{{"file", a.input},     {"cells", mesh.num_cells()}, {"min_quality", qmin},
-                     {"max_quality", qmax}, {"mean_quality", mean},      {"histogram", hist}};
-    if (a.classes)
-      j["classes"] = count_similarity_classes(mesh);
-    print_json(j);
-    return kExitOk;
-  }
-  std::cout << "cells: " << mesh.num_cells() << "\n"
-            << "quality: min " << qmin << " max " << qmax << " mean " << mean << "\n"
-            << "histogram (mean ratio):\n";
-  for (int b = 0; b < bins; ++b) {
-    char buf[96];
-    std::snprintf(buf, sizeof buf, "  [%.2f, %.2f%c %zu\n", double(b) / bins, double(b + 1) / bins,
-                  b + 1 == bins ? ']' : ')', hist[std::size_t(b)]);
-    std::cout << buf;
-  }
-  if (a.classes)
-    std::cout << "classes: " << count_similarity_classes(mesh) << "\n";
-  return kExitOk;
-}
-
 } // namespace
 
 Command add_info(CLI::App &app) {
@@ -182,31 +97,6 @@ Command add_info(CLI::App &app) {
   cmd->add_option("input", a->input, "Mesh file")->required();
   add_common_flags(cmd, a->flags);
   return {cmd, [a] { return run_info(*a); }};
-}
-
-Command add_check(CLI::App &app) {
-  auto a = std::make_shared<CheckArgs>();
-  auto *cmd = app.add_subcommand(
-      "check",
-      "Check conformity: facets shared by at most two cells, no degenerate or inverted "
-      "cell; with --against, volume, boundary measure and Euler characteristic unchanged.");
-  cmd->footer("Example: bisect check ball-10.vtu --against data/ball.msh   (exit 2 names the "
-              "first failure)");
-  cmd->add_option("input", a->input, "Mesh file")->required();
-  cmd->add_option("--against", a->against, "The original mesh it was refined from");
-  add_common_flags(cmd, a->flags);
-  return {cmd, [a] { return run_check(*a); }};
-}
-
-Command add_quality(CLI::App &app) {
-  auto a = std::make_shared<QualityArgs>();
-  auto *cmd = app.add_subcommand("quality", "Mean-ratio quality histogram and similarity classes.");
-  cmd->footer("Example: bisect quality tet-12.vtu --classes");
-  cmd->add_option("input", a->input, "Mesh file")->required();
-  cmd->add_flag("--classes", a->classes, "Count similarity classes");
-  cmd->add_option("--bins", a->bins, "Histogram bins (default 10)")->check(CLI::Range(1, 1000));
-  add_common_flags(cmd, a->flags);
-  return {cmd, [a] { return run_quality(*a); }};
 }
 
 } // namespace bisect::cli

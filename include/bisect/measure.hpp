@@ -20,6 +20,11 @@ double signed_volume(const double *verts, int dim);
 // the equilateral simplex, 0 for a degenerate one.
 double mean_ratio(const double *verts, int dim);
 
+// Orients the simplex of `mesh`'s vertices `ids` (dim+1 of them, in the
+// mesh's cells or not) positively: swaps ids[0] and ids[1] when its signed
+// volume is negative, and returns whether it did. The one copy of this rule.
+bool orient_positively(const Mesh &mesh, VertexId *ids);
+
 // Copies the coordinates of cell c into out[(dim+1)*dim].
 void cell_points(const Mesh &mesh, CellId c, double *out);
 

@@ -71,15 +71,10 @@ void encode_state(Mesh &mesh) {
   const std::size_t nc = mesh.num_cells();
   DataArray state{kStateArray, 1, std::vector<double>(mesh.marked() ? nc : 0)};
   state.type = ValueType::Int32;
-  double pts[5 * 4];
   int swapped[5] = {1, 0, 2, 3, 4};
   const int swapped_rank = permutation_rank(swapped, nv);
   for (std::size_t c = 0; c < nc; ++c) {
-    cell_points(mesh, CellId(c), pts);
-    VertexId *x = mesh.cell(CellId(c));
-    const bool flip = signed_volume(pts, n) < 0;
-    if (flip)
-      std::swap(x[0], x[1]);
+    const bool flip = orient_positively(mesh, mesh.cell(CellId(c)));
     if (mesh.marked())
       state.values[c] = double(pack_state(flip ? swapped_rank : 0, mesh.stage[c], mesh.tag[c]));
   }

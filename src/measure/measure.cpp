@@ -241,6 +241,16 @@ double mean_ratio(const double *verts, int dim) {
   return dispatch(dim, [&]<int D>() { return mean_ratio_t<D>(verts); });
 }
 
+bool orient_positively(const Mesh &mesh, VertexId *ids) {
+  double pts[5 * 4];
+  for (int i = 0; i <= mesh.dim; ++i)
+    std::copy(mesh.point(ids[i]), mesh.point(ids[i]) + mesh.dim, pts + i * mesh.dim);
+  if (signed_volume(pts, mesh.dim) >= 0)
+    return false;
+  std::swap(ids[0], ids[1]);
+  return true;
+}
+
 void cell_points(const Mesh &mesh, CellId c, double *out) {
   dispatch(mesh.dim, [&]<int D>() { cell_points_t<D>(mesh, c, out); });
 }

@@ -305,14 +305,6 @@ std::string reconcile(const Mesh &mesh, const std::vector<std::uint32_t> &comp,
   return {};
 }
 
-template <int Dim> void orient_positively(const Mesh &mesh, VertexId *x) {
-  double pts[(Dim + 1) * Dim];
-  for (int i = 0; i <= Dim; ++i)
-    std::copy(mesh.point(x[i]), mesh.point(x[i]) + Dim, pts + i * Dim);
-  if (signed_volume(pts, Dim) < 0)
-    std::swap(x[0], x[1]);
-}
-
 } // namespace
 
 Colouring colour_mesh(const Mesh &mesh) {
@@ -544,10 +536,7 @@ Mesh barycentric_subdivision(const Mesh &mesh, std::vector<std::uint8_t> *colour
       if (n == 3)
         sub[2] = facet_centre[c * N + o[3]]; // the face {o0, o1, o2} is opposite o3
       sub[n] = centre[c];
-      if (n == 3)
-        orient_positively<3>(out, sub);
-      else
-        orient_positively<2>(out, sub);
+      orient_positively(out, sub);
       out.cells.insert(out.cells.end(), sub, sub + N);
     }
   }

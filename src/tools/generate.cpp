@@ -79,8 +79,7 @@ Mesh single_cell(int dim, std::vector<double> points) {
   mesh.coords = std::move(points);
   for (int k = 0; k <= dim; ++k)
     mesh.cells.push_back(VertexId(k));
-  if (signed_volume(mesh.coords.data(), dim) < 0)
-    std::swap(mesh.cells[0], mesh.cells[1]);
+  orient_positively(mesh, mesh.cells.data());
   return mesh;
 }
 
