@@ -41,10 +41,12 @@ inline constexpr const char *kEdgeRankArray = "bisect:edge_rank";
 // The bisection tree (mesh.hpp, ALGORITHMS.md §10), one-component integer
 // arrays so that converters that only take scalar fields (meshio's XDMF and
 // Gmsh 2.2 writers) keep them:
-//   bisect:generation (cell) generation of the cell, 0..65535
+//   bisect:generation (cell) generation of the cell, 0..kMaxGeneration
 //   bisect:parent_a, bisect:parent_b (point) the ends of the edge the vertex
 //     is the midpoint of, as ids of the file's points, both smaller than the
 //     vertex's own id; -1 for an original vertex.
+// The deepest generation a file may give (see tree.cpp).
+inline constexpr int kMaxGeneration = 8192;
 inline constexpr const char *kGenerationArray = "bisect:generation";
 inline constexpr const char *kParentAArray = "bisect:parent_a";
 inline constexpr const char *kParentBArray = "bisect:parent_b";

@@ -93,7 +93,10 @@ bool decode_tree(Mesh &mesh, const std::string &path) {
   const std::size_t nc = mesh.num_cells(), nv = mesh.num_vertices();
   std::vector<std::uint16_t> gen(nc, 0);
   if (generation) {
-    check_integers(*generation, nc, 0, std::numeric_limits<std::uint16_t>::max(), "cell", path);
+    // No bisection sequence doubles resolve is deeper than kMaxGeneration
+    // (the precision limit stops any edge after about 1,100 halvings, dim
+    // generations each); a deeper value is not bisect's and would overflow.
+    check_integers(*generation, nc, 0, kMaxGeneration, "cell", path);
     for (std::size_t c = 0; c < nc; ++c)
       gen[c] = std::uint16_t(generation->values[c]);
   }
