@@ -68,27 +68,8 @@ const char *kind_name(ErrorKind kind) {
   return "input";
 }
 
-// The message as one line: control characters (a newline a hostile file put
-// into a name) shown escaped, as the command line does.
-std::string one_line(const std::string &text) {
-  std::string out;
-  for (unsigned char c : text) {
-    if (c == '\n')
-      out += "\\n";
-    else if (c == '\r')
-      out += "\\r";
-    else if (c < 0x20 || c == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02X", c);
-      out += buf;
-    } else
-      out += char(c);
-  }
-  return out;
-}
-
 void raise_error(const bisect::Error &e) {
-  std::string message = one_line(e.what());
+  std::string message = bisect::one_line(e.what());
   if (e.kind == ErrorKind::Check && message.rfind("check failed: ", 0) != 0)
     message = "internal check failed: " + message;
   py::object type = py::reinterpret_borrow<py::object>(g_error_type);

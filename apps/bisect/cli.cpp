@@ -35,17 +35,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-std::string with_commas(std::size_t n) {
-  const std::string digits = std::to_string(n);
-  std::string s;
-  for (std::size_t i = 0; i < digits.size(); ++i) {
-    if (i > 0 && (digits.size() - i) % 3 == 0)
-      s += ',';
-    s += digits[i];
-  }
-  return s;
-}
-
 // Peak resident memory of this process so far, in bytes.
 double peak_rss_bytes() {
   struct rusage u {};

@@ -46,7 +46,6 @@ struct CommonFlags {
 void add_common_flags(CLI::App *cmd, CommonFlags &flags);
 
 double seconds_since(std::chrono::steady_clock::time_point t0);
-std::string with_commas(std::size_t n);
 double peak_rss_bytes();
 
 // Reads, validates and marks (or restores the marks of) an input mesh; says

@@ -43,25 +43,6 @@ void install_signal_handlers() {
   std::signal(SIGPIPE, SIG_IGN);
 }
 
-// An error message as one line: control characters a hostile file put into
-// it (a newline inside an attribute) are shown escaped.
-std::string one_line(const std::string &text) {
-  std::string out;
-  for (unsigned char c : text) {
-    if (c == '\n')
-      out += "\\n";
-    else if (c == '\r')
-      out += "\\r";
-    else if (c < 0x20 || c == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02X", c);
-      out += buf;
-    } else
-      out += char(c);
-  }
-  return out;
-}
-
 } // namespace
 
 int main(int argc, char **argv) {

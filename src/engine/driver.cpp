@@ -1,6 +1,7 @@
 // The iteration driver (driver.hpp): what `bisect refine` and the library's
 // callers run between reading and writing.
 #include "bisect/driver.hpp"
+#include "bisect/text.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -24,17 +25,6 @@ double available_bytes() {
     if (key == "MemAvailable:")
       return kb * 1024.0;
   return 0;
-}
-
-std::string with_commas(std::size_t n) {
-  const std::string digits = std::to_string(n);
-  std::string s;
-  for (std::size_t i = 0; i < digits.size(); ++i) {
-    if (i > 0 && (digits.size() - i) % 3 == 0)
-      s += ',';
-    s += digits[i];
-  }
-  return s;
 }
 
 // The temporary cell array refine_marked tags descendants with.

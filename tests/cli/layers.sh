@@ -7,7 +7,7 @@ source "$(dirname "$0")/lib.bash"
 cd "$ROOT"
 # The layer of each public header in include/bisect/.
 declare -A layer_of=(
-  [mesh]=core [error]=core
+  [mesh]=core [error]=core [text]=core
   [check]=measure [measure]=measure
   [mark]=engine [refine]=engine [driver]=engine [indicator]=engine [coarsen]=engine
   [io]=io [state]=io [output]=io
