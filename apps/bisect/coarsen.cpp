@@ -17,7 +17,7 @@ namespace {
 struct CoarsenArgs {
   std::string input, output, indicator, region;
   double below = std::nan("");
-  bool all = false, force = false, check = false;
+  bool all = false, force = false, check = false, origin = false;
   int passes = 1;
   std::vector<std::string> sums;
   CommonFlags flags;
@@ -73,6 +73,15 @@ int run_coarsen(const CoarsenArgs &a) {
   CoarsenOptions options;
   options.passes = a.passes;
   options.sum_arrays = a.sums;
+  if (a.origin) {
+    // Each input cell's index; a parent keeps its first child's (CoarsenOptions).
+    DataArray origin{kOriginArray, 1, std::vector<double>(mesh.num_cells()), ValueType::Int32};
+    for (std::size_t c = 0; c < mesh.num_cells(); ++c)
+      origin.values[c] = double(c);
+    std::erase_if(mesh.cell_data, [](const DataArray &d) { return d.name == kOriginArray; });
+    mesh.cell_data.push_back(std::move(origin));
+    options.first_arrays.push_back(kOriginArray);
+  }
   auto t_pass = std::chrono::steady_clock::now();
   auto on_pass = [&](const CoarsenPass &p) {
     if (!quiet) {
@@ -127,12 +136,14 @@ Command add_coarsen(CLI::App &app) {
       "coarsen", "Undo bisections where marked: remove vertices made by refinement, pass by pass.");
   cmd->footer("Example: bisect coarsen ball.refined.vtu --all -n 3 -o ball-3.vtu\n"
               "Needs a file written by bisect refine (or coarsen): the bisection tree travels as "
-              "the arrays bisect:generation, bisect:parent_a and bisect:parent_b. A pass removes "
-              "every vertex made by bisection whose cells are all marked and all children of its "
-              "bisection, merging them back into their parents; vertices of the original mesh are "
-              "never removed. Cell arrays: the children's common value, else their mean (--sum: "
-              "their sum). Before writing, a check: no degenerate or folded cell, the input's "
-              "volume and boundary measure (exit 2 otherwise).\n" +
+              "the arrays bisect:generation, bisect:parent_a, bisect:parent_b and bisect:level. "
+              "A vertex made by bisection can go when its cells are all marked and all children "
+              "of its bisection: they merge back into their parents. A pass undoes the newest "
+              "refinement iteration around each vertex, so after refine -n N, coarsen --all -n N "
+              "gives the input back; vertices of the original mesh are never removed. Cell "
+              "arrays: the children's common value, else their mean (--sum: their sum). Before "
+              "writing, a check: no degenerate or folded cell, the input's volume and boundary "
+              "measure (exit 2 otherwise).\n" +
               std::string(kExitCodesHelp));
   cmd->add_option("input", a->input, "Input mesh (.vtu or .msh) with its bisection tree")
       ->required();
@@ -147,12 +158,14 @@ Command add_coarsen(CLI::App &app) {
   reg->excludes(all);
   cmd->add_option("--passes,-n", a->passes,
                   "Coarsening passes (default 1; 0: until a pass removes nothing). A pass "
-                  "undoes one level of the bisection tree, which can take more passes than "
-                  "refinement took iterations")
+                  "undoes the newest refinement iteration around each vertex")
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--sum", a->sums,
                   "Cell array whose parent value is the children's sum "
                   "(repeatable)");
+  cmd->add_flag("--origin", a->origin,
+                "Write the cell array bisect:origin: for each output cell the index, in the "
+                "input, of the first (lowest-index) input cell merged into it");
   cmd->add_option("--output,-o", a->output,
                   "Output mesh (.vtu or .msh); default <input stem>.coarsened.vtu here");
   cmd->add_flag("--force,-f", a->force, "Overwrite existing output files (never the input)");

@@ -18,6 +18,9 @@ struct CoarsenOptions {
   // value when they agree, else their volume-weighted mean (the two children
   // of a bisection have equal volumes, so the plain mean).
   std::vector<std::string> sum_arrays;
+  // Cell arrays whose parent value is its first child's (the one with the
+  // smaller index), e.g. bisect:origin, an index into an earlier mesh.
+  std::vector<std::string> first_arrays;
 };
 
 struct CoarsenPass {
@@ -36,18 +39,21 @@ struct CoarsenResult {
 
 // Runs up to options.passes passes on a marked mesh with a tree (mesh.hpp;
 // without one nothing changes). `marked_cells` has one entry per cell (non-
-// zero: may be merged away). A pass removes every created vertex z whose whole
-// star is marked and consists of pairs of siblings: the two children of one
+// zero: may be merged away). A made vertex z can go when its whole star is
+// marked and consists of pairs of siblings: the two children of one
 // bisection of z's parent edge, each pair checked by bisecting the
 // reconstructed parent again (tuple, stage, tag) and getting exactly the pair.
 // Each pair is replaced by that parent, with generation one less, in the
-// slot of the child with the smaller id; removed cells and vertices are
-// compacted out (survivors keep their relative order). A merged parent counts
-// as marked in the next pass. Generation-0 cells and original vertices are
-// never removed. Cell arrays: see CoarsenOptions; point arrays keep their
-// values at the surviving vertices. A vertex whose star is not all siblings
-// waits for a later pass. The result is conforming when the input is.
-// Linear in the mesh per pass. `on_pass` (optional) sees each finished pass.
+// slot of the child with the smaller id. A pass undoes the newest level
+// (mesh.hpp) around each vertex: it removes, in sweeps until none removes
+// anything, the vertices no vertex of whose star is of a newer level; so the
+// newest level of the whole mesh goes in every pass, and refining N times
+// and coarsening everything N passes gives the input back. Removed cells and
+// vertices are compacted out at the end of a pass (survivors keep their
+// relative order). A merged parent counts as marked. Generation-0 cells and
+// original vertices are never removed. Cell arrays: see CoarsenOptions;
+// point arrays keep their values at the surviving vertices. The result is
+// conforming when the input is. `on_pass` (optional) sees each finished pass.
 CoarsenResult coarsen(Mesh &mesh, const std::vector<char> &marked_cells,
                       const CoarsenOptions &options = {},
                       const std::function<void(const CoarsenPass &)> &on_pass = {});

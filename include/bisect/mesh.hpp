@@ -122,11 +122,18 @@ struct Mesh {
   //  - parent_edge, 2 per vertex: the ends of the edge the vertex was made
   //    the midpoint of, both smaller ids than the vertex; kNoVertex twice for
   //    an original vertex. 8 bytes per vertex (about 1.5 per cell in 3D).
+  //  - level, per vertex: the refine() call that made it, counted over the
+  //    sequence (0 for an original vertex, 1 for the first call's, ...); a
+  //    coarsening pass undoes the newest level around each vertex, so N
+  //    passes of coarsen undo N refinement iterations. Optional: when not
+  //    sized for the mesh (a file without the array), every made vertex
+  //    counts as level 1. 2 bytes per vertex.
   // Code that adds, removes or renumbers cells or vertices of a mesh without
   // keeping these up to date must clear them (clear_tree); refine() treats
   // arrays not sized for the mesh as no tree.
   std::vector<std::uint16_t> generation;
   std::vector<VertexId> parent_edge;
+  std::vector<std::uint16_t> level;
 
   std::size_t num_vertices() const { return dim ? coords.size() / dim : 0; }
   std::size_t num_cells() const { return dim ? cells.size() / (dim + 1) : 0; }
@@ -140,6 +147,7 @@ struct Mesh {
   void clear_tree() {
     generation.clear();
     parent_edge.clear();
+    level.clear();
   }
   const double *point(VertexId v) const { return coords.data() + std::size_t(v) * dim; }
   const VertexId *cell(CellId c) const { return cells.data() + std::size_t(c) * (dim + 1); }

@@ -45,11 +45,15 @@ inline constexpr const char *kEdgeRankArray = "bisect:edge_rank";
 //   bisect:parent_a, bisect:parent_b (point) the ends of the edge the vertex
 //     is the midpoint of, as ids of the file's points, both smaller than the
 //     vertex's own id; -1 for an original vertex.
+//   bisect:level (point) the refinement iteration that made the vertex, 0
+//     for an original vertex (optional: without it every made vertex is
+//     level 1, and one coarsening pass undoes as much as it can).
 // The deepest generation a file may give (see tree.cpp).
 inline constexpr int kMaxGeneration = 8192;
 inline constexpr const char *kGenerationArray = "bisect:generation";
 inline constexpr const char *kParentAArray = "bisect:parent_a";
 inline constexpr const char *kParentBArray = "bisect:parent_b";
+inline constexpr const char *kLevelArray = "bisect:level";
 
 // Adds the tree arrays when the mesh has a tree; otherwise removes any
 // (e.g. copied from another mesh's point data by a tool).

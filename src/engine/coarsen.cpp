@@ -1,8 +1,10 @@
 // Coarsening along the bisection tree (ALGORITHMS.md §10), the inverse of
-// refine.cpp. A pass: find the created vertices whose whole star is marked
-// and made of sibling pairs, pair the siblings by re-bisecting each
-// reconstructed parent and comparing the children, replace every pair by its
-// parent, and compact the removed cells and vertices out.
+// refine.cpp. A pass chooses the vertices of the newest level around them,
+// then sweeps: find the chosen
+// vertices whose whole star is marked and made of sibling pairs, pair the
+// siblings by re-bisecting each reconstructed parent and comparing the
+// children, replace every pair by its parent in place; until a sweep finds
+// nothing. Then the removed cells and vertices are compacted out.
 //
 // Undo rules. Every child knows where its bisection put the new vertex z:
 //   Maubach child, tag d':  z = y[d], d = d' + 1 if d' < n else 1 (§10);
@@ -42,18 +44,54 @@ template <int Dim> class Coarsener {
 public:
   Coarsener(Mesh &mesh, std::vector<char> &marks, const CoarsenOptions &options)
       : m_(mesh), order_(edge_order(mesh)), marks_(marks) {
+    auto named = [](const std::vector<std::string> &names, const std::string &name) {
+      return std::find(names.begin(), names.end(), name) != names.end();
+    };
     for (const DataArray &a : mesh.cell_data)
-      sum_.push_back(std::find(options.sum_arrays.begin(), options.sum_arrays.end(), a.name) !=
-                     options.sum_arrays.end());
+      rule_.push_back(named(options.sum_arrays, a.name)     ? Rule::Sum
+                      : named(options.first_arrays, a.name) ? Rule::First
+                                                            : Rule::Common);
   }
 
+  // A pass undoes the newest level of refinement around each vertex
+  // (mesh.hpp, `level`): the vertices no vertex of whose star is newer are
+  // removed in sweeps until a sweep finds nothing (a vertex waits for the
+  // later bisections in its star, which are of its own level: midpoints are
+  // shared only within one refine call); cells and vertices are compacted
+  // once at the end.
   CoarsenPass run_pass() {
     CoarsenPass report;
-    find_merges();
+    const std::size_t nc = m_.num_cells(), nv = m_.num_vertices();
+    dead_.assign(nc, 0);
+    removed_.assign(nv, 0);
+    removed_count_ = 0;
+    select_newest();
+    build_stars();
+    std::vector<VertexId> work;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (eligible_[v])
+        work.push_back(VertexId(v));
+    std::vector<char> queued(nv, 0);
+    std::size_t merged = 0;
+    while (!work.empty()) {
+      find_merges(work);
+      merged += merges_.size();
+      apply_merges();
+      // Next sweep: the vertices of the parents (their stars changed).
+      work.clear();
+      for (const Merge &mg : merges_)
+        for (const VertexId x : mg.x)
+          if (eligible_[x] && !removed_[x] && !queued[x]) {
+            queued[x] = 1;
+            work.push_back(x);
+          }
+      for (const VertexId x : work)
+        queued[x] = 0;
+    }
     report.removed_vertices = removed_count_;
-    report.merged_pairs = merges_.size();
-    if (!merges_.empty()) {
-      merge_cells();
+    report.merged_pairs = merged;
+    if (merged) {
+      compact_cells();
       remove_vertices();
     }
     report.cells = m_.num_cells();
@@ -263,61 +301,72 @@ private:
       std::reverse(x, x + N);
   }
 
-  // The merges of this pass: for every created vertex whose star is all
-  // marked children of its bisection, pairs of siblings.
-  void find_merges() {
-    merges_.clear();
-    removed_.assign(m_.num_vertices(), 0);
-    removed_count_ = 0;
+  // The cells around each eligible vertex at the start of the pass (CSR).
+  // Later, a cell of a vertex's list may have died: its merge put the parent
+  // in the sibling's slot (alias_), which holds the vertex unless it is the
+  // removed one.
+  void build_stars() {
     const std::size_t nv = m_.num_vertices(), nc = m_.num_cells();
-    // start[v]: the star size of v, less the marked children of v's bisection.
-    std::vector<std::uint32_t> degree(nv + 1, 0), children(nv, 0);
+    star_start_.assign(nv + 1, 0);
     for (std::size_t c = 0; c < nc; ++c) {
       const VertexId *x = m_.cell(CellId(c));
       for (int i = 0; i < N; ++i)
-        ++degree[x[i]];
-      if (!marks_[c] || m_.generation[c] == 0)
-        continue;
-      if (m_.stage[c] == Stage::Maubach && m_.tag[c] == Dim)
-        orient(m_.cell(CellId(c)));
-      const int k = new_vertex_index(m_.stage[c], m_.tag[c]);
-      if (k >= 0 && m_.parent_edge[2 * std::size_t(x[k])] != kNoVertex)
-        ++children[x[k]];
+        star_start_[x[i] + 1] += eligible_[x[i]];
     }
-    // Bucket the stars of the candidates: offsets in `start`.
-    std::vector<std::uint32_t> &start = degree;
-    std::uint32_t total = 0;
-    for (std::size_t v = 0; v < nv; ++v) {
-      const std::uint32_t d = degree[v];
-      start[v] = total;
-      if (children[v] == d && d > 0 && d % 2 == 0)
-        total += d;
-      else
-        children[v] = 0; // not a candidate
-    }
-    start[nv] = total;
-    std::vector<CellId> stars(total);
-    std::vector<std::uint32_t> &fill = children;
     for (std::size_t v = 0; v < nv; ++v)
-      fill[v] = fill[v] ? start[v] : 0;
+      star_start_[v + 1] += star_start_[v];
+    star_cells_.resize(star_start_[nv]);
+    std::vector<std::uint32_t> fill(star_start_.begin(), star_start_.end() - 1);
     for (std::size_t c = 0; c < nc; ++c) {
-      if (!marks_[c] || m_.generation[c] == 0)
-        continue;
-      const int k = new_vertex_index(m_.stage[c], m_.tag[c]);
-      if (k < 0)
-        continue;
-      const VertexId z = m_.cell(CellId(c))[k];
-      if (start[z + 1] > start[z])
-        stars[fill[z]++] = CellId(c);
+      const VertexId *x = m_.cell(CellId(c));
+      for (int i = 0; i < N; ++i)
+        if (eligible_[x[i]])
+          star_cells_[fill[x[i]]++] = CellId(c);
     }
+    alias_.assign(nc, kNoCell);
+  }
+
+  CellId live(CellId c) const {
+    while (alias_[c] != kNoCell)
+      c = alias_[c];
+    return c;
+  }
+
+  // The cells around v now, when all of them are marked children of v's
+  // bisection (an even number); else empty.
+  bool children_star(VertexId v, std::vector<CellId> &star) {
+    star.clear();
+    for (std::uint32_t i = star_start_[v]; i < star_start_[v + 1]; ++i) {
+      const CellId c = live(star_cells_[i]);
+      VertexId *x = m_.cell(c);
+      if (std::find(x, x + N, v) == x + N || std::find(star.begin(), star.end(), c) != star.end())
+        continue;
+      if (!marks_[c] || m_.generation[c] == 0)
+        return false;
+      if (m_.stage[c] == Stage::Maubach && m_.tag[c] == Dim)
+        orient(x);
+      const int k = new_vertex_index(m_.stage[c], m_.tag[c]);
+      if (k < 0 || x[k] != v)
+        return false;
+      star.push_back(c);
+    }
+    return !star.empty() && star.size() % 2 == 0;
+  }
+
+  // The merges of this sweep: for every vertex of `work` that is eligible,
+  // still there, and whose star is all marked children of its bisection,
+  // pairs of siblings.
+  void find_merges(const std::vector<VertexId> &work) {
+    merges_.clear();
+    std::vector<CellId> star;
     std::vector<char> paired;
     std::vector<Merge> found;
-    for (std::size_t v = 0; v < nv; ++v) {
-      const std::size_t k = start[v + 1] - start[v];
-      if (k == 0)
+    for (const VertexId v : work) {
+      if (!eligible_[v] || removed_[v] || !children_star(v, star))
         continue;
-      const VertexId z = VertexId(v), a = m_.parent_edge[2 * v], b = m_.parent_edge[2 * v + 1];
-      const CellId *star = stars.data() + start[v];
+      const std::size_t k = star.size();
+      const VertexId z = v, a = m_.parent_edge[2 * std::size_t(v)],
+                     b = m_.parent_edge[2 * std::size_t(v) + 1];
       paired.assign(k, 0);
       found.clear();
       bool ok = true;
@@ -336,11 +385,11 @@ private:
         for (int pass = 0; pass < 2 && !ok; ++pass) {
           exact_ = pass == 0;
           if (stage1_first)
-            ok = pair_stage1(z, a, b, star, k, i, paired, found) ||
-                 pair_maubach(z, a, b, star, k, i, paired, found);
+            ok = pair_stage1(z, a, b, star.data(), k, i, paired, found) ||
+                 pair_maubach(z, a, b, star.data(), k, i, paired, found);
           else
-            ok = pair_maubach(z, a, b, star, k, i, paired, found) ||
-                 pair_stage1(z, a, b, star, k, i, paired, found);
+            ok = pair_maubach(z, a, b, star.data(), k, i, paired, found) ||
+                 pair_stage1(z, a, b, star.data(), k, i, paired, found);
         }
       }
       if (!ok)
@@ -351,22 +400,65 @@ private:
     }
   }
 
-  // Each pair becomes its parent in the keep slot; the drop slots are
-  // compacted out (in place: a drop slot is always after its keep slot, so
-  // it is read before anything is written over it).
-  void merge_cells() {
-    const std::size_t nc = m_.num_cells();
-    std::vector<std::uint32_t> slot(nc, kNoCell); // keep: its merge; drop: kNoCell - 1
-    for (std::size_t i = 0; i < merges_.size(); ++i) {
-      slot[merges_[i].keep] = std::uint32_t(i);
-      slot[merges_[i].drop] = kNoCell - 1;
+  // The level of vertex v (mesh.hpp): 0 original, else the stored level or 1.
+  std::uint16_t level(std::size_t v) const {
+    if (m_.level.size() == m_.num_vertices())
+      return m_.level[v];
+    return m_.parent_edge[2 * v] == kNoVertex ? 0 : 1;
+  }
+
+  // The made vertices no vertex of whose star is newer: where the newest
+  // level around them is their own.
+  void select_newest() {
+    const std::size_t nv = m_.num_vertices(), nc = m_.num_cells();
+    std::vector<std::uint16_t> around(nv, 0);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const VertexId *x = m_.cell(CellId(c));
+      std::uint16_t top = 0;
+      for (int i = 0; i < N; ++i)
+        top = std::max(top, level(x[i]));
+      for (int i = 0; i < N; ++i)
+        around[x[i]] = std::max(around[x[i]], top);
     }
+    eligible_.assign(nv, 0);
+    for (std::size_t v = 0; v < nv; ++v)
+      eligible_[v] = m_.parent_edge[2 * v] != kNoVertex && level(v) >= around[v];
+  }
+
+  // Each pair becomes its parent in the keep slot; the drop slot dies (it is
+  // compacted out at the end of the pass).
+  void apply_merges() {
+    for (const Merge &mg : merges_) {
+      const std::size_t w = mg.keep, d = mg.drop;
+      std::copy(mg.x, mg.x + N, m_.cell(CellId(w)));
+      m_.stage[w] = mg.stage;
+      m_.tag[w] = mg.tag;
+      m_.generation[w] = std::uint16_t(m_.generation[w] - 1);
+      marks_[w] = 1;
+      for (std::size_t i = 0; i < m_.cell_data.size(); ++i) {
+        DataArray &a = m_.cell_data[i];
+        const std::size_t k = std::size_t(a.components);
+        for (std::size_t j = 0; j < k; ++j) {
+          const double p = a.values[w * k + j], q = a.values[d * k + j];
+          a.values[w * k + j] = rule_[i] == Rule::Sum     ? p + q
+                                : rule_[i] == Rule::First ? p
+                                : p == q                  ? p
+                                                          : 0.5 * (p + q);
+        }
+      }
+      dead_[d] = 1;
+      alias_[d] = CellId(w);
+    }
+  }
+
+  // Removes the dead cells; survivors keep their relative order.
+  void compact_cells() {
+    const std::size_t nc = m_.num_cells();
     std::size_t w = 0;
     for (std::size_t c = 0; c < nc; ++c) {
-      const std::uint32_t s = slot[c];
-      if (s == kNoCell - 1)
+      if (dead_[c])
         continue;
-      if (s == kNoCell) {
+      if (w != c) {
         std::copy(m_.cell(CellId(c)), m_.cell(CellId(c)) + N, m_.cell(CellId(w)));
         m_.stage[w] = m_.stage[c];
         m_.tag[w] = m_.tag[c];
@@ -376,21 +468,6 @@ private:
           const std::size_t k = std::size_t(a.components);
           std::copy(a.values.begin() + c * k, a.values.begin() + (c + 1) * k,
                     a.values.begin() + w * k);
-        }
-      } else {
-        const Merge &mg = merges_[s];
-        std::copy(mg.x, mg.x + N, m_.cell(CellId(w)));
-        m_.stage[w] = mg.stage;
-        m_.tag[w] = mg.tag;
-        m_.generation[w] = std::uint16_t(m_.generation[c] - 1);
-        marks_[w] = 1;
-        for (std::size_t i = 0; i < m_.cell_data.size(); ++i) {
-          DataArray &a = m_.cell_data[i];
-          const std::size_t k = std::size_t(a.components);
-          for (std::size_t j = 0; j < k; ++j) {
-            const double p = a.values[c * k + j], q = a.values[std::size_t(mg.drop) * k + j];
-            a.values[w * k + j] = sum_[i] ? p + q : p == q ? p : 0.5 * (p + q);
-          }
         }
       }
       ++w;
@@ -430,10 +507,14 @@ private:
       }
       m_.parent_edge[2 * w] = p;
       m_.parent_edge[2 * w + 1] = q;
+      if (m_.level.size() == nv)
+        m_.level[w] = p == kNoVertex ? 0 : m_.level[v];
       ++w;
     }
     m_.coords.resize(w * Dim);
     m_.parent_edge.resize(2 * w);
+    if (m_.level.size() == nv)
+      m_.level.resize(w);
     for (DataArray &a : m_.point_data)
       a.values.resize(w * std::size_t(a.components));
     for (VertexId &x : m_.cells)
@@ -452,7 +533,14 @@ private:
   Mesh &m_;
   EdgeOrder order_;
   std::vector<char> &marks_;
-  std::vector<bool> sum_; // per cell array
+  // How a parent's value comes from its children's (CoarsenOptions).
+  enum class Rule : std::uint8_t { Common, Sum, First };
+  std::vector<Rule> rule_;                // per cell array
+  std::vector<char> dead_;                // per cell, this pass: merged into its sibling's slot
+  std::vector<char> eligible_;            // per vertex, this pass: may be removed
+  std::vector<std::uint32_t> star_start_; // per vertex + 1: its cells in star_cells_
+  std::vector<CellId> star_cells_;        // at the start of the pass (build_stars)
+  std::vector<CellId> alias_;             // per cell: the slot it was merged into
   std::vector<Merge> merges_;
   std::vector<char> removed_; // per vertex, this pass
   std::size_t removed_count_ = 0;

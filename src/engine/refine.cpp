@@ -101,6 +101,17 @@ public:
       m_.generation.assign(nc0_, 0);
       m_.parent_edge.assign(2 * nv0_, kNoVertex);
     }
+    // This call's vertices are one level newer than the newest so far.
+    if (m_.level.size() != nv0_) {
+      m_.level.assign(nv0_, 0);
+      for (std::size_t v = 0; v < nv0_; ++v)
+        if (m_.parent_edge[2 * v] != kNoVertex)
+          m_.level[v] = 1;
+    }
+    const std::uint16_t newest =
+        m_.level.empty() ? 0 : *std::max_element(m_.level.begin(), m_.level.end());
+    level_ =
+        newest == std::numeric_limits<std::uint16_t>::max() ? newest : std::uint16_t(newest + 1);
     // The undo log costs memory: keep it only when a limit could trip.
     logging_ = limits.max_cells != std::numeric_limits<std::size_t>::max() ||
                nv0_ + 16 * nc0_ >= limits.max_vertices || limits.cancel;
@@ -251,6 +262,7 @@ private:
     m_.coords.insert(m_.coords.end(), mid, mid + Dim);
     m_.parent_edge.push_back(a);
     m_.parent_edge.push_back(b);
+    m_.level.push_back(level_);
     endpoint_.push_back(0);
     endpoint_[a] = endpoint_[b] = 1;
     return next;
@@ -319,6 +331,7 @@ private:
     }
     m_.generation.resize(nc0_);
     m_.parent_edge.resize(2 * nv0_);
+    m_.level.resize(nv0_);
     m_.cells.resize(nc0_ * N);
     m_.stage.resize(nc0_);
     m_.tag.resize(nc0_);
@@ -377,6 +390,7 @@ private:
   EdgeOrder order_;
   RefineLimits limits_;
   std::size_t nc0_, nv0_;
+  std::uint16_t level_ = 1; // of the vertices this call makes (mesh.hpp)
   bool logging_ = false;
   MidpointMap mids_;
   std::vector<CellId> origin_;         // per appended cell: the input cell it descends from

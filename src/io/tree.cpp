@@ -27,7 +27,8 @@ void put(std::vector<DataArray> &arrays, DataArray a) {
 }
 
 bool is_tree_array(const DataArray &a) {
-  return a.name == kGenerationArray || a.name == kParentAArray || a.name == kParentBArray;
+  return a.name == kGenerationArray || a.name == kParentAArray || a.name == kParentBArray ||
+         a.name == kLevelArray;
 }
 
 // The array's values as integers in [lo, hi]; InputError naming the entity.
@@ -72,6 +73,13 @@ void encode_tree(Mesh &mesh) {
   put(mesh.cell_data, std::move(generation));
   put(mesh.point_data, std::move(a));
   put(mesh.point_data, std::move(b));
+  if (mesh.level.size() == nv) {
+    DataArray level{kLevelArray, 1, std::vector<double>(mesh.level.begin(), mesh.level.end()),
+                    ValueType::UInt16};
+    put(mesh.point_data, std::move(level));
+  } else {
+    std::erase_if(mesh.point_data, [](const DataArray &x) { return x.name == kLevelArray; });
+  }
 }
 
 void strip_tree(Mesh &mesh) {
@@ -82,10 +90,13 @@ void strip_tree(Mesh &mesh) {
 bool decode_tree(Mesh &mesh, const std::string &path) {
   const DataArray *generation = find(mesh.cell_data, kGenerationArray);
   const DataArray *pa = find(mesh.point_data, kParentAArray),
-                  *pb = find(mesh.point_data, kParentBArray);
+                  *pb = find(mesh.point_data, kParentBArray),
+                  *level = find(mesh.point_data, kLevelArray);
   mesh.clear_tree();
-  if (!generation && !pa && !pb)
+  if (!generation && !pa && !pb) {
+    strip_tree(mesh); // a lone bisect:level means nothing
     return false;
+  }
   if (!pa != !pb)
     throw InputError(path, std::string("point arrays ") + kParentAArray + " and " + kParentBArray +
                                " come together; only " + (pa ? kParentAArray : kParentBArray) +
@@ -134,8 +145,25 @@ bool decode_tree(Mesh &mesh, const std::string &path) {
       parents[2 * v + 1] = VertexId(b);
     }
   }
+  // Levels: 0 exactly for original vertices (else the array is ignored:
+  // it is only a hint for coarsening, whose merges are all checked).
+  std::vector<std::uint16_t> levels;
+  if (level) {
+    check_integers(*level, nv, 0, std::numeric_limits<std::uint16_t>::max(), "vertex", path);
+    levels.resize(nv);
+    for (std::size_t v = 0; v < nv; ++v) {
+      levels[v] = std::uint16_t(level->values[v]);
+      if ((levels[v] == 0) != (parents[2 * v] == kNoVertex))
+        throw InputError(path,
+                         "vertex " + std::to_string(v) + ": " + kLevelArray + " " +
+                             std::to_string(levels[v]) +
+                             (levels[v] == 0 ? " (original) but it is a midpoint"
+                                             : " (made by bisection) but it has no parent edge"));
+    }
+  }
   strip_tree(mesh);
   mesh.generation = std::move(gen);
+  mesh.level = std::move(levels);
   mesh.parent_edge = std::move(parents);
   return true;
 }

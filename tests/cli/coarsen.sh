@@ -28,7 +28,7 @@ PY
 
 json_field() { /usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
 
-# 2D and 3D, every marking: refine 4 times, coarsen until nothing changes.
+# 2D and 3D, every marking: refine 4 times, coarsen 4 passes.
 printf '%s\n' '{"type": "sphere", "center": [0.3, 0.3, 0.3], "radius": 0.3}' >s3.json
 for marking in index longest sorted; do
   for input in "$ROOT/data/square.msh" "$ROOT/data/octant.msh"; do
@@ -37,11 +37,11 @@ for marking in index longest sorted; do
     name=$(basename "$input" .msh)-$marking
     expect_exit 0 "$BISECT" refine "$input" --region "$region" -n 4 --marking $marking -o $name.vtu -q \
       --quality-csv none
-    expect_exit 0 "$BISECT" coarsen $name.vtu --all -n 0 -o $name.back.vtu --json -q
+    expect_exit 0 "$BISECT" coarsen $name.vtu --all -n 4 -o $name.back.vtu --json -q
     cp "$WORK/out" $name.json
     [[ $(json_field $name.json cells) == $("$BISECT" info "$input" | sed -n 's/^cells: //p') ]] ||
       fail "$name: coarsened cell count: $(cat $name.json)"
-    (($(json_field $name.json passes) >= 4)) || fail "$name: fewer passes than iterations"
+    (($(json_field $name.json passes) <= 4)) || fail "$name: more passes than iterations"
     for key in input output passes cells vertices removed_vertices initial_cells; do
       grep -q "\"$key\"" $name.json || fail "--json has no key $key"
     done
@@ -53,6 +53,31 @@ for marking in index longest sorted; do
     same_cells $name.vtu $name.again.vtu
   done
 done
+
+# One pass undoes the last iteration: refine -n 4 then coarsen -n 1 gives
+# refine -n 3; --origin: the first input cell merged into each output cell.
+expect_exit 0 "$BISECT" refine "$ROOT/data/square.msh" --region "$ROOT/data/regions/circle.json" -n 3 \
+  -o square-3.vtu -q --quality-csv none
+expect_exit 0 "$BISECT" coarsen square-index.vtu --all -n 1 --origin -o square-back3.vtu -q
+same_cells square-3.vtu square-back3.vtu
+/usr/bin/python3 - <<'PY' || fail "--origin"
+import meshio, numpy as np
+fine, back = meshio.read("square-index.vtu"), meshio.read("square-back3.vtu")
+o = back.cell_data["bisect:origin"][0]
+assert o.dtype == np.int32, o.dtype
+n = len(fine.cells_dict["triangle"])
+assert 0 <= o.min() and o.max() < n and len(set(o.tolist())) == len(o), (o.min(), o.max(), n)
+# each output cell's origin is an input cell that lies inside it
+fp, bp = fine.points[:, :2], back.points[:, :2]
+for c, src in zip(back.cells_dict["triangle"], o):
+    a, b, d = bp[c]
+    g = fp[fine.cells_dict["triangle"][src]].mean(axis=0)
+    m = np.array([b - a, d - a]).T
+    l = np.linalg.solve(m, g - a)
+    assert l.min() > -1e-12 and l.sum() < 1 + 1e-12, (src, l)
+lv = fine.point_data["bisect:level"]
+assert lv.max() == 4 and lv.min() == 0, (lv.min(), lv.max())
+PY
 
 # One pass at a time, with a progress line per pass; -o default name.
 expect_exit 0 "$BISECT" coarsen square-index.vtu --all -n 2
@@ -82,7 +107,7 @@ cp "$WORK/out" none.json
 import meshio
 m = meshio.read("square-index.vtu")
 names = set(m.point_data) | set(m.cell_data)
-for n in ["bisect:parent_a", "bisect:parent_b", "bisect:generation"]:
+for n in ["bisect:parent_a", "bisect:parent_b", "bisect:generation", "bisect:level"]:
     assert n in names, (n, sorted(names))
 m.point_data["xcoord"] = m.points[:, 0].copy()
 meshio.write("meshio.vtu", m)
@@ -101,7 +126,7 @@ expect_exit 0 "$BISECT" generate kuhn --dim 3 --cells 2 -o cube.vtu
 expect_exit 0 "$BISECT" extrude cube.vtu --slices 0:1:2 -o st.vtu
 printf '%s\n' '{"type": "sphere", "center": [0.3, 0.3, 0.3, 0.3], "radius": 0.3}' >s4.json
 expect_exit 0 "$BISECT" refine st.vtu --region s4.json -n 3 -o st-fine.vtu -q --quality-csv none
-expect_exit 0 "$BISECT" coarsen st-fine.vtu --all -n 0 -o st-back.vtu --json -q
+expect_exit 0 "$BISECT" coarsen st-fine.vtu --all -n 3 -o st-back.vtu --json -q
 cp "$WORK/out" st.json
 expect_exit 0 "$BISECT" info st.vtu --json
 cp "$WORK/out" st-info.json

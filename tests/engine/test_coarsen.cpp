@@ -167,8 +167,7 @@ std::vector<Case> cases() {
 
 } // namespace
 
-TEST_CASE("coarsen: passes until none removes anything after N local refinements give the "
-          "input's cells and vertices back",
+TEST_CASE("coarsen: N passes after N local refinements give the input's cells and vertices back",
           "[coarsen][2d][3d][4d]") {
   for (Case &k : cases()) {
     if (k.stalls)
@@ -179,10 +178,11 @@ TEST_CASE("coarsen: passes until none removes anything after N local refinements
     refine_locally(m, k.iterations);
     REQUIRE(m.num_cells() > input.num_cells());
     const std::size_t fine_cells = m.num_cells(), fine_vertices = m.num_vertices();
-    const CoarsenResult r = coarsen_all(m, 0);
-    // A pass undoes one level of the tree, not one refinement iteration:
-    // closure chains need more passes than iterations (ALGORITHMS.md §10).
-    REQUIRE(r.passes >= k.iterations);
+    const CoarsenResult r = coarsen_all(m, k.iterations);
+    // A pass undoes at least the newest refinement iteration (more where a
+    // bisection of it reused an older midpoint: that vertex goes whole).
+    REQUIRE(r.passes <= k.iterations);
+    REQUIRE(r.passes >= 1);
     REQUIRE(r.removed_vertices == fine_vertices - input.num_vertices());
     REQUIRE(r.merged_pairs == fine_cells - input.num_cells());
     REQUIRE(m.num_cells() == input.num_cells());
@@ -198,6 +198,39 @@ TEST_CASE("coarsen: passes until none removes anything after N local refinements
     // Generation 0 cells and original vertices are never removed.
     REQUIRE(coarsen_all(m, 1).removed_vertices == 0);
   }
+}
+
+TEST_CASE("coarsen: one pass after N local refinements removes the newest iteration",
+          "[coarsen][2d][3d][4d]") {
+  // A pass removes every vertex of the newest level and, where an older
+  // level is the newest around a vertex (the last iteration did not reach
+  // it), that one too: mostly exactly the mesh of iteration N - 1.
+  std::size_t exact = 0, total = 0;
+  for (Case &k : cases()) {
+    if (k.stalls)
+      continue;
+    INFO(k.name << ", " << k.iterations << " iterations");
+    const Invariants inv = measure_invariants(k.mesh);
+    Mesh before = k.mesh;
+    refine_locally(before, k.iterations - 1);
+    Mesh m = before;
+    refine_locally(m, 1);
+    if (m.num_vertices() == before.num_vertices())
+      continue; // the region selected nothing new in the last iteration
+    const std::uint16_t newest = *std::max_element(m.level.begin(), m.level.end());
+    REQUIRE(std::count(m.level.begin(), m.level.end(), newest) ==
+            std::ptrdiff_t(m.num_vertices() - before.num_vertices()));
+    REQUIRE(coarsen_all(m, 1).passes == 1);
+    REQUIRE_CONFORMING(m, inv);
+    REQUIRE(check_state_consistency(m).empty());
+    REQUIRE(m.level.size() == m.num_vertices());
+    REQUIRE(*std::max_element(m.level.begin(), m.level.end()) < newest);
+    REQUIRE(m.num_cells() <= before.num_cells());
+    ++total;
+    exact += cell_shapes(m) == cell_shapes(before) && vertex_set(m) == vertex_set(before);
+  }
+  INFO(exact << " of " << total << " exactly the mesh of iteration N - 1");
+  REQUIRE(exact * 4 >= total * 3);
 }
 
 TEST_CASE("coarsen: a cycle of reused midpoints stalls full coarsening, conformingly",
