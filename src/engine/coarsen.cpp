@@ -71,22 +71,19 @@ public:
     for (std::size_t v = 0; v < nv; ++v)
       if (eligible_[v])
         work.push_back(VertexId(v));
-    std::vector<char> queued(nv, 0);
     std::size_t merged = 0;
-    while (!work.empty()) {
-      find_merges(work);
-      merged += merges_.size();
-      apply_merges();
-      // Next sweep: the vertices of the parents (their stars changed).
+    for (;;) {
+      sweep(work, merged);
+      // Cycles of waiting vertices go together; what waited for them is
+      // swept again.
+      const std::size_t grouped = remove_groups();
+      if (grouped == 0)
+        break;
+      merged += grouped;
       work.clear();
-      for (const Merge &mg : merges_)
-        for (const VertexId x : mg.x)
-          if (eligible_[x] && !removed_[x] && !queued[x]) {
-            queued[x] = 1;
-            work.push_back(x);
-          }
-      for (const VertexId x : work)
-        queued[x] = 0;
+      for (std::size_t v = 0; v < nv; ++v)
+        if (eligible_[v] && !removed_[v])
+          work.push_back(VertexId(v));
     }
     report.removed_vertices = removed_count_;
     report.merged_pairs = merged;
@@ -301,6 +298,27 @@ private:
       std::reverse(x, x + N);
   }
 
+  // Sweeps from `work` until one finds nothing; each sweep's next work is
+  // the vertices of the parents it made (their stars changed).
+  void sweep(std::vector<VertexId> work, std::size_t &merged) {
+    std::vector<char> queued(m_.num_vertices(), 0);
+    while (!work.empty()) {
+      find_merges(work);
+      merged += merges_.size();
+      apply_merges();
+      // Next sweep: the vertices of the parents (their stars changed).
+      work.clear();
+      for (const Merge &mg : merges_)
+        for (const VertexId x : mg.x)
+          if (eligible_[x] && !removed_[x] && !queued[x]) {
+            queued[x] = 1;
+            work.push_back(x);
+          }
+      for (const VertexId x : work)
+        queued[x] = 0;
+    }
+  }
+
   // The cells around each eligible vertex at the start of the pass (CSR).
   // Later, a cell of a vertex's list may have died: its merge put the parent
   // in the sibling's slot (alias_), which holds the vertex unless it is the
@@ -353,6 +371,182 @@ private:
     return !star.empty() && star.size() % 2 == 0;
   }
 
+  // Pairs star[i] (a child of z's bisection of {a, b}) with its sibling in
+  // the star, recording the merge; false when there is none.
+  bool pair_one(VertexId z, VertexId a, VertexId b, const std::vector<CellId> &star, std::size_t i,
+                std::vector<char> &paired, std::vector<Merge> &found) {
+    const std::size_t k = star.size();
+    const CellId y = star[i];
+    // Stage 1 parents come first for a tag-2 Maubach child young enough
+    // to have entered Maubach from Stage 1 (generation <= n - 2).
+    const bool stage1_first =
+        Dim >= 3 && m_.stage[y] == Stage::Maubach && m_.tag[y] == 2 && m_.generation[y] <= Dim - 2;
+    // The parent itself when it is found (children equal to the cells);
+    // else one that bisects alike (same_cell), e.g. after a Stage 1
+    // merge forgot the order of an old sub-simplex.
+    for (int pass = 0; pass < 2; ++pass) {
+      exact_ = pass == 0;
+      const bool ok = stage1_first ? pair_stage1(z, a, b, star.data(), k, i, paired, found) ||
+                                         pair_maubach(z, a, b, star.data(), k, i, paired, found)
+                                   : pair_maubach(z, a, b, star.data(), k, i, paired, found) ||
+                                         pair_stage1(z, a, b, star.data(), k, i, paired, found);
+      if (ok)
+        return true;
+    }
+    return false;
+  }
+
+  // The bisection vertex of live cell c, or kNoVertex when c cannot be
+  // merged (unmarked, generation 0, no state of a child, an original vertex).
+  VertexId bisection_vertex(CellId c) {
+    if (!marks_[c] || m_.generation[c] == 0)
+      return kNoVertex;
+    VertexId *x = m_.cell(c);
+    if (m_.stage[c] == Stage::Maubach && m_.tag[c] == Dim)
+      orient(x);
+    const int k = new_vertex_index(m_.stage[c], m_.tag[c]);
+    if (k < 0 || m_.parent_edge[2 * std::size_t(x[k])] == kNoVertex)
+      return kNoVertex;
+    return x[k];
+  }
+
+  // The live cells around v (from its star list at the start of the pass).
+  void live_star(VertexId v, std::vector<CellId> &star) const {
+    star.clear();
+    for (std::uint32_t i = star_start_[v]; i < star_start_[v + 1]; ++i) {
+      const CellId c = live(star_cells_[i]);
+      const VertexId *x = m_.cell(c);
+      if (std::find(x, x + N, v) != x + N && std::find(star.begin(), star.end(), c) == star.end())
+        star.push_back(c);
+    }
+  }
+
+  // Vertices that wait for each other in a cycle (each one's star holds a
+  // cell bisected at the next, a midpoint reused within one refine call) can
+  // only go together. From each eligible vertex still there: the group of
+  // the bisection vertices of its star, closed (all eligible, at most
+  // kMaxGroup); then sibling pairs at any of them are merged, leaves first,
+  // until none is left. When no cell holds a vertex of the group any more,
+  // the group is gone; otherwise every merge of the try is undone. Returns
+  // the number of merges kept.
+  static constexpr std::size_t kMaxGroup = 64;
+  struct Saved {
+    Merge merge;
+    VertexId x[N];
+    Stage stage;
+    std::uint8_t tag;
+    std::uint16_t generation;
+    char mark;
+    std::vector<double> values; // the keep cell's data, array by array
+  };
+
+  std::size_t remove_groups() {
+    std::size_t kept = 0;
+    const std::size_t nv = m_.num_vertices();
+    std::vector<char> tried(nv, 0);
+    std::vector<VertexId> group;
+    std::vector<CellId> star, children;
+    std::vector<char> paired;
+    std::vector<Merge> found;
+    std::vector<Saved> saved;
+    for (std::size_t v0 = 0; v0 < nv; ++v0) {
+      if (!eligible_[v0] || removed_[v0] || tried[v0])
+        continue;
+      // The group: closed under "waits for".
+      group.assign(1, VertexId(v0));
+      tried[v0] = 1;
+      bool ok = true;
+      for (std::size_t g = 0; g < group.size() && ok; ++g) {
+        live_star(group[g], star);
+        for (const CellId c : star) {
+          const VertexId z = bisection_vertex(c);
+          if (z == kNoVertex || !eligible_[z] || removed_[z]) {
+            ok = false;
+            break;
+          }
+          if (std::find(group.begin(), group.end(), z) == group.end()) {
+            if (group.size() == kMaxGroup) {
+              ok = false;
+              break;
+            }
+            group.push_back(z);
+          }
+        }
+      }
+      if (!ok || group.size() < 2)
+        continue;
+      // Merge sibling pairs at the group's vertices until none is left.
+      saved.clear();
+      for (bool progress = true; progress;) {
+        progress = false;
+        for (const VertexId z : group) {
+          live_star(z, star);
+          children.clear();
+          for (const CellId c : star)
+            if (bisection_vertex(c) == z)
+              children.push_back(c);
+          const VertexId a = m_.parent_edge[2 * std::size_t(z)],
+                         b = m_.parent_edge[2 * std::size_t(z) + 1];
+          paired.assign(children.size(), 0);
+          found.clear();
+          for (std::size_t i = 0; i < children.size(); ++i)
+            if (!paired[i])
+              pair_one(z, a, b, children, i, paired, found);
+          for (const Merge &mg : found)
+            saved.push_back(save(mg));
+          merges_ = found;
+          apply_merges();
+          progress |= !found.empty();
+        }
+      }
+      bool gone = true;
+      for (const VertexId z : group) {
+        live_star(z, star);
+        gone &= star.empty();
+      }
+      if (gone) {
+        for (const VertexId z : group)
+          removed_[z] = 1;
+        removed_count_ += group.size();
+        kept += saved.size();
+      } else {
+        for (auto it = saved.rbegin(); it != saved.rend(); ++it)
+          restore(*it);
+      }
+    }
+    merges_.clear();
+    return kept;
+  }
+
+  Saved save(const Merge &mg) const {
+    Saved s{mg, {}, m_.stage[mg.keep], m_.tag[mg.keep], m_.generation[mg.keep], marks_[mg.keep],
+            {}};
+    std::copy(m_.cell(mg.keep), m_.cell(mg.keep) + N, s.x);
+    for (const DataArray &a : m_.cell_data) {
+      const std::size_t k = std::size_t(a.components);
+      s.values.insert(s.values.end(), a.values.begin() + mg.keep * k,
+                      a.values.begin() + (mg.keep + 1) * k);
+    }
+    return s;
+  }
+
+  void restore(const Saved &s) {
+    const std::size_t w = s.merge.keep, d = s.merge.drop;
+    std::copy(s.x, s.x + N, m_.cell(CellId(w)));
+    m_.stage[w] = s.stage;
+    m_.tag[w] = s.tag;
+    m_.generation[w] = s.generation;
+    marks_[w] = s.mark;
+    std::size_t at = 0;
+    for (DataArray &a : m_.cell_data) {
+      const std::size_t k = std::size_t(a.components);
+      std::copy(s.values.begin() + at, s.values.begin() + at + k, a.values.begin() + w * k);
+      at += k;
+    }
+    dead_[d] = 0;
+    alias_[d] = kNoCell;
+  }
+
   // The merges of this sweep: for every vertex of `work` that is eligible,
   // still there, and whose star is all marked children of its bisection,
   // pairs of siblings.
@@ -370,28 +564,8 @@ private:
       paired.assign(k, 0);
       found.clear();
       bool ok = true;
-      for (std::size_t i = 0; i < k && ok; ++i) {
-        if (paired[i])
-          continue;
-        const CellId y = star[i];
-        // Stage 1 parents come first for a tag-2 Maubach child young enough
-        // to have entered Maubach from Stage 1 (generation <= n - 2).
-        const bool stage1_first = Dim >= 3 && m_.stage[y] == Stage::Maubach && m_.tag[y] == 2 &&
-                                  m_.generation[y] <= Dim - 2;
-        // The parent itself when it is found (children equal to the cells);
-        // else one that bisects alike (same_cell), e.g. after a Stage 1
-        // merge forgot the order of an old sub-simplex.
-        ok = false;
-        for (int pass = 0; pass < 2 && !ok; ++pass) {
-          exact_ = pass == 0;
-          if (stage1_first)
-            ok = pair_stage1(z, a, b, star.data(), k, i, paired, found) ||
-                 pair_maubach(z, a, b, star.data(), k, i, paired, found);
-          else
-            ok = pair_maubach(z, a, b, star.data(), k, i, paired, found) ||
-                 pair_stage1(z, a, b, star.data(), k, i, paired, found);
-        }
-      }
+      for (std::size_t i = 0; i < k && ok; ++i)
+        ok = paired[i] || pair_one(z, a, b, star, i, paired, found);
       if (!ok)
         continue;
       merges_.insert(merges_.end(), found.begin(), found.end());
