@@ -89,6 +89,43 @@ public:
     carry_n_ = 0;
   }
 
+  // The file offset of the next byte written (flushes the buffer).
+  long position() {
+    flush();
+    const long at = std::ftell(file_);
+    if (at < 0 && !error_)
+      error_ = errno ? errno : EIO;
+    return at;
+  }
+  // Overwrites the bytes at `at` (written earlier) with `s`; writing goes on
+  // at the end. The file is always a regular temporary file (OutputSet).
+  void patch(long at, const std::string &s) {
+    flush();
+    if (at < 0 || std::fseek(file_, at, SEEK_SET) != 0 ||
+        std::fwrite(s.data(), 1, s.size(), file_) != s.size() ||
+        std::fseek(file_, 0, SEEK_END) != 0)
+      if (!error_)
+        error_ = errno ? errno : EIO;
+  }
+  // The base64 text of `n` bytes (one whole stream, padded).
+  static std::string base64_text(const unsigned char *p, std::size_t n) {
+    static const char *kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    for (std::size_t i = 0; i < n; i += 3) {
+      const std::size_t k = std::min<std::size_t>(3, n - i);
+      unsigned v = unsigned(p[i]) << 16;
+      if (k > 1)
+        v |= unsigned(p[i + 1]) << 8;
+      if (k > 2)
+        v |= unsigned(p[i + 2]);
+      out += kDigits[v >> 18 & 63];
+      out += kDigits[v >> 12 & 63];
+      out += k > 1 ? kDigits[v >> 6 & 63] : '=';
+      out += k > 2 ? kDigits[v & 63] : '=';
+    }
+    return out;
+  }
+
   void close() {
     flush();
     if (std::fflush(file_) != 0 && !error_)
@@ -215,8 +252,17 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
     const std::size_t blocks = (bytes + kBlock - 1) / kBlock;
     std::vector<std::uint64_t> header{blocks, kBlock,
                                       bytes % kBlock ? bytes % kBlock : (blocks ? kBlock : 0)};
-    std::vector<unsigned char> packed;
+    // The header (with every block's compressed size) comes first: write it
+    // with sizes 0, stream the blocks, then write it again in place (its
+    // base64 text has the same length), so no compressed copy of the whole
+    // array is held (for the connectivity of a large mesh, ~30 bytes a cell).
+    const long header_at = w.position();
+    header.resize(3 + blocks, 0);
+    w.base64(reinterpret_cast<const unsigned char *>(header.data()),
+             header.size() * sizeof(std::uint64_t));
+    w.end_base64();
     std::vector<unsigned char> tmp;
+    std::size_t block = 0;
     for (std::size_t first = 0; first < count; first += per_block) {
       fill(first);
       const auto *src = reinterpret_cast<const unsigned char *>(raw.data());
@@ -237,14 +283,12 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
           throw CheckError("LZ4 failed to compress array '" + name + "'");
         out = std::size_t(got);
       }
-      header.push_back(out);
-      packed.insert(packed.end(), tmp.begin(), tmp.begin() + std::ptrdiff_t(out));
+      header[3 + block++] = out;
+      w.base64(tmp.data(), out);
     }
-    w.base64(reinterpret_cast<const unsigned char *>(header.data()),
-             header.size() * sizeof(std::uint64_t));
     w.end_base64();
-    w.base64(packed.data(), packed.size());
-    w.end_base64();
+    w.patch(header_at, Writer::base64_text(reinterpret_cast<const unsigned char *>(header.data()),
+                                           header.size() * sizeof(std::uint64_t)));
   }
   w.text("\n        </DataArray>\n");
 }
