@@ -60,7 +60,8 @@ Command add_check(CLI::App &app) {
       "cell; with --against, volume, boundary measure and Euler characteristic unchanged.");
   cmd->footer("Example: bisect check ball-10.vtu --against data/ball.msh   (exit 2 names the "
               "first failure)");
-  cmd->add_option("input", a->input, "Mesh file")->required();
+  cmd->add_option("input", a->input, "Mesh file (.vtu or .msh; - reads standard input)")
+      ->required();
   cmd->add_option("--against", a->against, "The original mesh it was refined from");
   add_common_flags(cmd, a->flags);
   return {cmd, [a] { return run_check(*a); }};

@@ -15,7 +15,7 @@ namespace bisect::cli {
 namespace {
 
 struct CoarsenArgs {
-  std::string input, output, indicator, region;
+  std::string input, output, indicator, region, format;
   double below = std::nan("");
   bool all = false, force = false, check = false, origin = false;
   int passes = 1;
@@ -50,14 +50,25 @@ int run_coarsen(const CoarsenArgs &a) {
     throw UsageError("--indicator needs --below X (cells whose value is below X are coarsened)");
   if (a.indicator.empty() && !std::isnan(a.below))
     throw UsageError("--below needs --indicator NAME");
-  const std::string out =
-      a.output.empty() ? fs::path(a.input).stem().string() + ".coarsened.vtu" : a.output;
-  check_extension(out);
+  std::string out = a.output.empty() ? (a.input == "-" ? std::string("stdin")
+                                                       : fs::path(a.input).stem().string()) +
+                                           ".coarsened.vtu"
+                                     : a.output;
+  // -o -: the mesh goes to standard output.
+  if (out == "-") {
+    if (a.format.empty())
+      throw UsageError("-o -: give the format with --format vtu or --format msh");
+    if (a.flags.json)
+      throw UsageError("--json and -o - both write to standard output; choose one");
+    out = "/dev/stdout";
+  }
+  if (a.format.empty())
+    check_extension(out);
   OutputSet outputs({a.input, a.region}, a.force);
   const int h_mesh = outputs.add(out);
 
   Mesh mesh = load_mesh(a.input);
-  check_output_format(out, mesh.dim);
+  check_output_format(out, mesh.dim, a.format);
   const std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
   const std::vector<char> marks = marked_cells(mesh, a);
   if (!quiet) {
@@ -103,7 +114,9 @@ int run_coarsen(const CoarsenArgs &a) {
               << "; no output written\n";
     return kExitCheck;
   }
-  write_output_mesh(outputs, h_mesh, mesh);
+  WriteOptions write;
+  write.format = a.format;
+  write_output_mesh(outputs, h_mesh, mesh, write);
   outputs.commit();
   const double total = seconds_since(t_start);
   if (a.flags.json) {
@@ -145,7 +158,8 @@ Command add_coarsen(CLI::App &app) {
               "writing, a check: no degenerate or folded cell, the input's volume and boundary "
               "measure (exit 2 otherwise).\n" +
               std::string(kExitCodesHelp));
-  cmd->add_option("input", a->input, "Input mesh (.vtu or .msh) with its bisection tree")
+  cmd->add_option("input", a->input,
+                  "Input mesh (.vtu or .msh) with its bisection tree; - reads standard input")
       ->required();
   auto *ind = cmd->add_option("--indicator", a->indicator,
                               "Cell array (or point array: a cell takes its vertices' max) whose "
@@ -167,7 +181,12 @@ Command add_coarsen(CLI::App &app) {
                 "Write the cell array bisect:origin: for each output cell the index, in the "
                 "input, of the first (lowest-index) input cell merged into it");
   cmd->add_option("--output,-o", a->output,
-                  "Output mesh (.vtu or .msh); default <input stem>.coarsened.vtu here");
+                  "Output mesh (.vtu or .msh; - standard output, with --format); default "
+                  "<input stem>.coarsened.vtu here");
+  cmd->add_option("--format", a->format,
+                  "Output format when the output's name has no .vtu/.msh extension "
+                  "(e.g. -o - --format vtu)")
+      ->check(CLI::IsMember({"vtu", "msh"}));
   cmd->add_flag("--force,-f", a->force, "Overwrite existing output files (never the input)");
   cmd->add_flag("--check", a->check,
                 "Full conformity check (and Euler characteristic) instead of the cheap one");

@@ -128,7 +128,8 @@ Command add_colour(CLI::App &app) {
               "across facets, which either finds a colouring or proves there is none (exit 1 "
               "with the reason, e.g. an interior edge in an odd number of tets). Colours 0, "
               "1, 2, 3 are seed 001's labels A, B, C, D.");
-  cmd->add_option("input", a->input, "2D or 3D mesh (.vtu or .msh)")->required();
+  cmd->add_option("input", a->input, "2D or 3D mesh (.vtu or .msh; - reads standard input)")
+      ->required();
   cmd->add_flag(
       "--barycentric", a->barycentric,
       "Subdivide barycentrically (6 triangles / 24 tets per cell), coloured by vertex kind");

@@ -94,7 +94,8 @@ Command add_info(CLI::App &app) {
   auto a = std::make_shared<InfoArgs>();
   auto *cmd = app.add_subcommand("info", "Dimension, counts, bounding box, volume, quality.");
   cmd->footer("Example: bisect info data/ball.msh");
-  cmd->add_option("input", a->input, "Mesh file")->required();
+  cmd->add_option("input", a->input, "Mesh file (.vtu or .msh; - reads standard input)")
+      ->required();
   add_common_flags(cmd, a->flags);
   return {cmd, [a] { return run_info(*a); }};
 }

@@ -61,7 +61,8 @@ Command add_quality(CLI::App &app) {
   auto a = std::make_shared<QualityArgs>();
   auto *cmd = app.add_subcommand("quality", "Mean-ratio quality histogram and similarity classes.");
   cmd->footer("Example: bisect quality tet-12.vtu --classes");
-  cmd->add_option("input", a->input, "Mesh file")->required();
+  cmd->add_option("input", a->input, "Mesh file (.vtu or .msh; - reads standard input)")
+      ->required();
   cmd->add_flag("--classes", a->classes, "Count similarity classes");
   cmd->add_option("--bins", a->bins, "Histogram bins (default 10)")->check(CLI::Range(1, 1000));
   add_common_flags(cmd, a->flags);

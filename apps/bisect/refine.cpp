@@ -37,7 +37,7 @@ struct RefineArgs {
 };
 
 std::string default_output(const std::string &input) {
-  return fs::path(input).stem().string() + ".refined.vtu";
+  return (input == "-" ? std::string("stdin") : fs::path(input).stem().string()) + ".refined.vtu";
 }
 
 std::string default_csv(const std::string &output) {
@@ -281,7 +281,8 @@ Command add_refine(CLI::App &app) {
               "an edge whose extent is below 2^-40 of its ends' largest coordinate magnitude "
               "or below 2^-100.\n" +
               std::string(kExitCodesHelp));
-  cmd->add_option("input", a->input, "Input mesh (.vtu or .msh)")->required();
+  cmd->add_option("input", a->input, "Input mesh (.vtu or .msh; - reads standard input)")
+      ->required();
   cmd->add_option("--region,-r", a->region,
                   "Region spec (JSON): sphere, hemisphere, box, "
                   "halfspace, moving_sphere, levelset, union, intersection");

@@ -46,7 +46,8 @@ Command add_slice(CLI::App &app) {
                "mesh for ParaView (prisms are split into three tetrahedra), or a 3D (2D+t) mesh "
                "by a plane into a conforming triangle mesh.");
   cmd->footer("Example: bisect slice hypercube-25.vtu --t 0.5 -o section.vtu");
-  cmd->add_option("input", a->input, "4D mesh (.vtu), or 3D mesh")->required();
+  cmd->add_option("input", a->input, "4D mesh (.vtu), or 3D mesh (- reads standard input)")
+      ->required();
   auto *t_opt = cmd->add_option("--t", a->value, "Shorthand for --axis t --value VALUE");
   cmd->add_option("--axis", a->axis,
                   "x, y, z or t (default t: the last coordinate, z of a 3D mesh)")

@@ -12,10 +12,12 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <system_error>
 #include <unistd.h>
+#include <vector>
 
 namespace bisect {
 namespace {
@@ -114,7 +116,69 @@ void settle_plane(Mesh &mesh, const std::string &path, Format format) {
 
 } // namespace
 
+// Standard input ("-"): copied into a temporary file (the readers check
+// sizes against the file and read it by position), its format told by its
+// first byte ('<' XML: .vtu, '$' a Gmsh section: .msh); errors name "-".
+static Mesh read_stdin() {
+  const char *dir = std::getenv("TMPDIR");
+  std::string temp = std::string(dir && *dir ? dir : "/tmp") + "/bisect-stdin-XXXXXX";
+  const int fd = ::mkstemp(temp.data());
+  if (fd < 0)
+    throw InputError("-", "cannot copy standard input to a temporary file in " +
+                              std::string(dir && *dir ? dir : "/tmp") + ": " +
+                              write_failure(errno));
+  struct Remove {
+    std::string path;
+    int fd;
+    ~Remove() {
+      if (fd >= 0)
+        ::close(fd);
+      ::unlink(path.c_str());
+    }
+  } remove{temp, fd};
+  std::vector<char> buf(std::size_t(1) << 20);
+  char first = 0;
+  for (;;) {
+    const ssize_t n = ::read(0, buf.data(), buf.size());
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n < 0)
+      throw InputError("-", std::string("cannot read standard input: ") + std::strerror(errno));
+    if (n == 0)
+      break;
+    for (ssize_t i = 0; i < n && !first; ++i)
+      if (!std::isspace(static_cast<unsigned char>(buf[std::size_t(i)])) &&
+          static_cast<unsigned char>(buf[std::size_t(i)]) < 0x80)
+        first = buf[std::size_t(i)];
+    for (ssize_t done = 0; done < n;) {
+      const ssize_t w = ::write(fd, buf.data() + done, std::size_t(n - done));
+      if (w < 0 && errno == EINTR)
+        continue;
+      if (w < 0)
+        throw InputError("-",
+                         "cannot copy standard input to " + temp + ": " + write_failure(errno));
+      done += w;
+    }
+  }
+  ::close(remove.fd);
+  remove.fd = -1;
+  if (first != '<' && first != '$')
+    throw InputError("-", first ? "standard input is neither a .vtu (XML) nor a .msh file"
+                                : "standard input is empty");
+  const Format format = first == '<' ? Format::Vtu : Format::Msh;
+  Mesh mesh;
+  try {
+    mesh = format == Format::Vtu ? read_vtu(temp) : read_msh(temp);
+  } catch (const InputError &e) {
+    throw InputError("-", strip_prefix(e.what(), temp + ": "));
+  }
+  settle_plane(mesh, "-", format);
+  return mesh;
+}
+
 Mesh read_mesh(const std::string &path) {
+  if (path == "-")
+    return read_stdin();
   check_readable_file(path);
   const Format format = format_of(path);
   Mesh mesh = format == Format::Vtu ? read_vtu(path) : read_msh(path);

@@ -21,8 +21,10 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <fcntl.h>
 #include <limits>
 #include <string>
+#include <sys/stat.h>
 #include <vector>
 
 namespace bisect {
@@ -38,7 +40,12 @@ public:
     if (!file_)
       throw InputError(path, "cannot write: " + write_failure(errno));
     buf_.reserve(kBuffer + 8);
+    struct stat st {};
+    const int fd = ::fileno(file_);
+    seekable_ = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && !(::fcntl(fd, F_GETFL) & O_APPEND);
   }
+  // Whether position() and patch() work (a regular file, not a pipe).
+  bool seekable() const { return seekable_; }
   ~Writer() {
     if (file_)
       std::fclose(file_);
@@ -161,6 +168,7 @@ private:
   unsigned char carry_[3] = {0, 0, 0};
   int carry_n_ = 0;
   int error_ = 0;
+  bool seekable_ = false;
 };
 
 std::string xml_escaped(const std::string &s) {
@@ -256,12 +264,17 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
     // with sizes 0, stream the blocks, then write it again in place (its
     // base64 text has the same length), so no compressed copy of the whole
     // array is held (for the connectivity of a large mesh, ~30 bytes a cell).
-    const long header_at = w.position();
+    // Into a pipe (-o -) the compressed blocks are held until the header is
+    // written.
+    const bool stream = w.seekable();
+    const long header_at = stream ? w.position() : -1;
     header.resize(3 + blocks, 0);
-    w.base64(reinterpret_cast<const unsigned char *>(header.data()),
-             header.size() * sizeof(std::uint64_t));
-    w.end_base64();
-    std::vector<unsigned char> tmp;
+    if (stream) {
+      w.base64(reinterpret_cast<const unsigned char *>(header.data()),
+               header.size() * sizeof(std::uint64_t));
+      w.end_base64();
+    }
+    std::vector<unsigned char> tmp, packed;
     std::size_t block = 0;
     for (std::size_t first = 0; first < count; first += per_block) {
       fill(first);
@@ -284,11 +297,22 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
         out = std::size_t(got);
       }
       header[3 + block++] = out;
-      w.base64(tmp.data(), out);
+      if (stream)
+        w.base64(tmp.data(), out);
+      else
+        packed.insert(packed.end(), tmp.begin(), tmp.begin() + std::ptrdiff_t(out));
     }
-    w.end_base64();
-    w.patch(header_at, Writer::base64_text(reinterpret_cast<const unsigned char *>(header.data()),
-                                           header.size() * sizeof(std::uint64_t)));
+    if (stream) {
+      w.end_base64();
+      w.patch(header_at, Writer::base64_text(reinterpret_cast<const unsigned char *>(header.data()),
+                                             header.size() * sizeof(std::uint64_t)));
+    } else {
+      w.base64(reinterpret_cast<const unsigned char *>(header.data()),
+               header.size() * sizeof(std::uint64_t));
+      w.end_base64();
+      w.base64(packed.data(), packed.size());
+      w.end_base64();
+    }
   }
   w.text("\n        </DataArray>\n");
 }

@@ -40,6 +40,25 @@ B refine "$S" --region region.json -o - --format msh -q >stdout.msh || fail "-o 
 expect_exit 0 B check stdout.msh --against "$S"
 expect_exit 1 B refine "$S" --region region.json -o - -q
 grep -q -- "--format" "$WORK/err" || fail "-o - without --format should ask for it"
+# Standard input ("-"), its format told by the content; a pipe both ways:
+# .vtu into a pipe (compressed arrays are held, the header cannot be patched).
+B refine - --region region.json -n 2 -o - --format vtu -q <"$S" >piped.vtu || fail "- in, - out"
+expect_exit 0 B check piped.vtu --against "$S"
+B refine - --region region.json -o - --format vtu -q <"$S" | B refine - --region region.json \
+  -o - --format msh -q | B info - >piped-info.txt || fail "a pipeline of refine - -o -"
+grep -q '^cells: ' piped-info.txt || fail "info - read nothing from the pipe"
+B refine "$S" --region region.json -o piped2.vtu -q --quality-csv none
+B coarsen - --all -n 1 -o - --format vtu -q <piped2.vtu | B info - >/dev/null || fail "coarsen -"
+echo 'not a mesh' >junk.txt
+expect_exit 1 B info - <junk.txt
+one_line_naming "-: standard input is neither a .vtu (XML) nor a .msh file"
+expect_exit 1 B info - </dev/null
+one_line_naming "-: standard input is empty"
+head -c 300 stdout.msh >truncated.msh
+expect_exit 1 B refine - --region region.json -o x.vtu -q <truncated.msh
+one_line_naming "-: "
+[[ ! -e x.vtu ]] || fail "a failed read from standard input wrote x.vtu"
+ls "${TMPDIR:-/tmp}"/bisect-stdin-* 2>/dev/null && fail "standard input's temporary copy was left"
 
 # 3. A character device is written into; /dev/full says why it fails.
 expect_exit 1 B refine "$S" --region region.json -o /dev/full --format vtu --quality-csv none -q
