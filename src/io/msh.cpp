@@ -1504,7 +1504,10 @@ void write_elements(Output &out, const std::vector<SimplexSet> &sets,
       out.size(b.count);
       for (std::size_t j = b.first; j < b.first + b.count; ++j) {
         const std::size_t c = plans[i].order[j];
-        out.size(set.first_tag + c + 1);
+        // Cells: tag = index + 1 (the cell order survives a round trip).
+        // Entities: tags in file order, which meshio's binary $ElementData
+        // reader needs (whose order is of no concern).
+        out.size(set.first_tag + (i == 0 ? c : j) + 1);
         for (std::size_t k = 0; k < nvs; ++k)
           out.size(std::uint64_t(set.ids[c * nvs + k]) + 1);
       }
@@ -1535,6 +1538,40 @@ void write_data(Output &out, const std::string &section, const DataArray &a, std
       out.raw<double>(a.values[row * nc + k]);
   }
   out.text("\n$End" + section + "\n");
+}
+
+// A cell array as $ElementData. With tagged entities the section lists them
+// too (meshio pairs element data with every element by position): an
+// entity's own value of the array (same name and components) or 0. Readers
+// that go by tags, ours included, ignore those rows.
+void write_element_data(Output &out, const DataArray &a, const std::vector<SimplexSet> &sets,
+                        const std::vector<EntityPlan> &plans, const std::vector<Entities> &blocks) {
+  if (sets.size() == 1)
+    return write_data(out, "ElementData", a, sets[0].count, plans[0].order);
+  std::size_t n = 0;
+  for (const SimplexSet &set : sets)
+    n += set.count;
+  out.text("$ElementData\n1\n\"" + a.name + "\"\n1\n0\n3\n0\n" + std::to_string(a.components) +
+           "\n" + std::to_string(n) + "\n");
+  const std::size_t nc = std::size_t(a.components);
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const DataArray *own = &a;
+    if (i > 0) { // sets[i] is the block of entities whose vertices it points at
+      own = nullptr;
+      for (const Entities &b : blocks)
+        if (b.vertices.data() == sets[i].ids)
+          for (const DataArray &e : b.data)
+            if (e.name == a.name && e.components == a.components)
+              own = &e;
+    }
+    for (std::size_t j = 0; j < sets[i].count; ++j) {
+      const std::size_t row = plans[i].order[j];
+      out.int32((long long)(sets[i].first_tag + (i == 0 ? row : j) + 1));
+      for (std::size_t k = 0; k < nc; ++k)
+        out.raw<double>(own ? own->values[row * nc + k] : 0.0);
+    }
+  }
+  out.text("\n$EndElementData\n");
 }
 
 } // namespace
@@ -1594,7 +1631,7 @@ void write_msh(const std::string &path, const Mesh &mesh) {
       write_data(out, "NodeData", a, mesh.num_vertices());
   for (const DataArray &a : mesh.cell_data)
     if (&a != geom && &a != phys)
-      write_data(out, "ElementData", a, mesh.num_cells(), plans[0].order);
+      write_element_data(out, a, sets, plans, mesh.entities);
   out.close();
 }
 

@@ -152,7 +152,7 @@ TEST_CASE("entities: the bundled meshes read with every group, its names, all fa
   require_all_faces(square);
 }
 
-TEST_CASE("entities: local refinement keeps each group's measure and every entity a face; "
+TEST_CASE("entities: local refinement keeps each group's measure and every entity a face, and "
           "coarsening gives the entities back",
           "[entities][refine][coarsen][2d][3d]") {
   for (const char *name : kTaggedMeshes) {
