@@ -17,10 +17,15 @@ EntitySplitter::EntitySplitter(Mesh &mesh) : m_(mesh) {
     dims_ |= 1u << b.dim;
     for (std::size_t i = 0; i < b.size(); ++i)
       add(face_key(b.entity(i), b.dim + 1), {std::uint32_t(bi), std::uint32_t(i)});
+    on_entity_.resize(m_.num_vertices(), 0);
+    for (VertexId v : b.vertices)
+      on_entity_[v] = 1;
   }
 }
 
 void EntitySplitter::split(const VertexId *x, int n, VertexId a, VertexId b, VertexId m) {
+  if (!on_entity(a) || !on_entity(b))
+    return; // no entity holds the edge (a, b)
   // The faces of x holding a and b: {a, b} plus d - 1 of the other vertices.
   VertexId others[4];
   int k = 0;
@@ -58,6 +63,9 @@ void EntitySplitter::split(const VertexId *x, int n, VertexId a, VertexId b, Ver
         }
         add(face_key(block.entity(r.index), int(nvs)), r);
         add(face_key(half, int(nvs)), {r.block, std::uint32_t(added)});
+        if (m >= on_entity_.size())
+          on_entity_.resize(std::max<std::size_t>(m + 1, 2 * on_entity_.size()), 0);
+        on_entity_[m] = 1;
       }
     });
   }

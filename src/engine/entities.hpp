@@ -32,8 +32,14 @@ private:
   };
   void add(const FaceKey &key, Ref ref) { index_.emplace(key, ref); }
 
+  bool on_entity(VertexId v) const { return v < on_entity_.size() && on_entity_[v]; }
+
   Mesh &m_;
   std::unordered_multimap<FaceKey, Ref, FaceKeyHash> index_;
+  // Per vertex: 1 when it is a vertex of some entity that can split. Most
+  // bisected edges have an end off every entity; this test spares them the
+  // hash lookups.
+  std::vector<char> on_entity_;
   unsigned dims_ = 0; // bit d: some block of dimension d >= 1 (points never split)
   std::vector<Ref> hits_;
 };

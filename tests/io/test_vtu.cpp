@@ -268,8 +268,8 @@ TEST_CASE("vtu: lower-dimensional cells are tagged entities with their cell data
     const Entities &e = m.entities[std::size_t(d)];
     CHECK(e.dim == d);
     REQUIRE(e.size() == 1);
-    CHECK(e.vertices == std::vector<VertexId>(std::vector<VertexId>{0, 1, 2}.begin(),
-                                              std::vector<VertexId>{0, 1, 2}.begin() + d + 1));
+    const std::vector<VertexId> first{0, 1, 2}; // the entity's vertices: a prefix
+    CHECK(e.vertices == std::vector<VertexId>(first.begin(), first.begin() + d + 1));
     REQUIRE(e.data.size() == 1);
     CHECK(e.data[0].name == "id");
     CHECK(e.data[0].values == std::vector<double>{100.0 + d});
