@@ -5,9 +5,11 @@
 // that is not a face is an input error naming it.
 #include "bisect/check.hpp"
 #include "bisect/coarsen.hpp"
+#include "bisect/generate.hpp"
 #include "bisect/io.hpp"
 #include "bisect/mark.hpp"
 #include "bisect/refine.hpp"
+#include "core/faces.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -258,4 +260,52 @@ TEST_CASE("entities: a tagged element that is not a face is an input error namin
   write_mesh(vtu, m);
   REQUIRE_THROWS_WITH(load_mesh(vtu), Catch::Contains("(triangle) is not a face of the mesh"));
   fs::remove(vtu);
+}
+
+TEST_CASE("entities: 4D tetrahedra, triangles and lines in a .vtu split with the pentatopes",
+          "[entities][io][refine][coarsen][4d]") {
+  // Tag the boundary facets x0 = 0 of a Kuhn hypercube mesh (tetrahedra),
+  // one of their triangles and one of its edges.
+  Mesh m = generate_kuhn(4, 2);
+  Entities tets, tris, lines;
+  tets.dim = 3;
+  tris.dim = 2;
+  lines.dim = 1;
+  for (std::size_t c = 0; c < m.num_cells(); ++c)
+    for_each_face(m.cell(CellId(c)), 5, 3, [&](const VertexId *f, int) {
+      if (std::all_of(f, f + 4, [&](VertexId v) { return m.point(v)[0] == 0; }))
+        tets.vertices.insert(tets.vertices.end(), f, f + 4);
+    });
+  REQUIRE(tets.size() > 0);
+  tris.vertices.assign(tets.vertices.begin(), tets.vertices.begin() + 3);
+  lines.vertices.assign(tets.vertices.begin(), tets.vertices.begin() + 2);
+  for (Entities *b : {&tets, &tris, &lines})
+    b->data.push_back(DataArray{"gmsh:physical", 1, std::vector<double>(b->size(), 7.0)});
+  m.entities = {lines, tris, tets};
+  const std::string vtu = temp_path("4d.vtu");
+  write_mesh(vtu, m);
+  Mesh in = load_mesh(vtu);
+  fs::remove(vtu);
+  REQUIRE(in.entities.size() == 3);
+  require_all_faces(in);
+  ensure_marked(in);
+  const auto shapes = entity_shapes(in);
+  double measures[3] = {};
+  for (const Entities &b : in.entities)
+    for (std::size_t i = 0; i < b.size(); ++i)
+      measures[b.dim - 1] += simplex_measure(in, b.entity(i), b.dim);
+  CHECK(measures[2] == Approx(1.0)); // the facet x0 = 0 of the unit hypercube
+  for (int it = 0; it < 3; ++it)
+    refine(in, cells_near(in, {0, 0, 0, 0}, 0.6));
+  require_all_faces(in);
+  double after[3] = {};
+  for (const Entities &b : in.entities)
+    for (std::size_t i = 0; i < b.size(); ++i)
+      after[b.dim - 1] += simplex_measure(in, b.entity(i), b.dim);
+  for (int d = 0; d < 3; ++d)
+    CHECK(after[d] == Approx(measures[d]).epsilon(1e-12));
+  CoarsenOptions all;
+  all.passes = 0;
+  coarsen(in, std::vector<char>(in.num_cells(), 1), all);
+  CHECK(entity_shapes(in) == shapes);
 }
