@@ -309,3 +309,34 @@ TEST_CASE("entities: 4D tetrahedra, triangles and lines in a .vtu split with the
   coarsen(in, std::vector<char>(in.num_cells(), 1), all);
   CHECK(entity_shapes(in) == shapes);
 }
+
+TEST_CASE("entities: a facet in two physical groups splits and merges as two entities",
+          "[entities][refine][coarsen][2d]") {
+  // Gmsh 2.2 writes an element once per physical group: the left side is
+  // also in group 9 here.
+  Mesh m = load_mesh(testing::data_path("square-tagged.msh"));
+  Entities &lines = *std::find_if(m.entities.begin(), m.entities.end(),
+                                  [](const Entities &e) { return e.dim == 1; });
+  const std::size_t n = lines.size();
+  DataArray &phys = *std::find_if(lines.data.begin(), lines.data.end(),
+                                  [](const DataArray &a) { return a.name == "gmsh:physical"; });
+  for (std::size_t i = 0; i < n; ++i)
+    if (phys.values[i] == 1) {
+      lines.vertices.insert(lines.vertices.end(), lines.entity(i), lines.entity(i) + 2);
+      for (DataArray &a : lines.data)
+        a.values.push_back(&a == &phys ? 9.0 : a.values[i]);
+    }
+  ensure_marked(m);
+  const auto shapes = entity_shapes(m);
+  const auto measures = group_measures(m);
+  REQUIRE(measures.at({1, 9}) == Approx(1));
+  for (int it = 0; it < 4; ++it)
+    refine(m, cells_near(m, {0, 0.5}, 0.3));
+  require_all_faces(m);
+  CHECK(group_measures(m).at({1, 9}) == Approx(1).epsilon(1e-12));
+  CHECK(group_measures(m).at({1, 1}) == Approx(1).epsilon(1e-12));
+  CoarsenOptions all;
+  all.passes = 0;
+  coarsen(m, std::vector<char>(m.num_cells(), 1), all);
+  CHECK(entity_shapes(m) == shapes);
+}
