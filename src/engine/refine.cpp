@@ -6,6 +6,10 @@
 // child 2 is appended. Midpoints are shared through a hash map from the edge
 // (sorted id pair) to the new vertex, cleared after every iteration: once an
 // iteration is conforming no cell has an edge that was bisected.
+//
+// Tagged entities (mesh.hpp) split with the cells: when a cell is bisected
+// at (a, b), its faces that are entities and hold a and b are replaced by
+// their halves (entities.hpp). A mesh without entities has no splitter.
 #include "bisect/refine.hpp"
 
 #include "bisect/mark.hpp"

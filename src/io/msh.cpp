@@ -15,7 +15,9 @@
 //    (integer tags: time step, components, number of entries), then entries
 //    "int tag, double values[components]" (binary in binary files).
 //
-// The reader keeps the linear simplices of the highest dimension; everything
+// The reader keeps the linear simplices of the highest dimension as cells,
+// and the lower-dimensional linear simplices of physical groups as tagged
+// entities (mesh.hpp; add_entities), with $PhysicalNames; everything
 // it rejects is reported as InputError(path, "line N: ...") for ASCII files
 // and "byte offset N: ..." for binary ones. A count read from the file never
 // reserves more than the rest of the file can hold, and every loop it drives

@@ -9,6 +9,10 @@
 //    array "t" (Float64, 1 component) holds the 4th coordinate; every
 //    pentatope is one VTK_POLY_VERTEX cell with 5 ids (VTK_CONVEX_POINT_SET
 //    with 5 ids is accepted on reading).
+//  - Tagged entities (mesh.hpp): lower-dimensional simplex cells (vertex,
+//    line, triangle, tetra below the cell dimension) after the volume cells,
+//    with their rows of the cell arrays; physical names as integer field
+//    data (tag, dimension), meshio's convention.
 #include "bisect/check.hpp"
 #include "bisect/io.hpp"
 #include "bisect/output.hpp"
