@@ -135,7 +135,8 @@ int simplex_dim(int type) {
 }
 
 KeptCells select_cells_4d(const std::string &path, const vtu::Grid &g) {
-  KeptCells kept{4, {}};
+  KeptCells kept;
+  kept.dim = 4;
   for (std::size_t c = 0; c < g.num_cells; ++c) {
     const int type = g.types[c];
     const std::int64_t npts = g.offsets[c + 1] - g.offsets[c];
@@ -178,7 +179,8 @@ KeptCells select_cells(const std::string &path, const vtu::Grid &g) {
     throw InputError(path, "no triangles or tetrahedra");
   }
   const int simplex = dim == 2 ? kTriangle : kTetra;
-  KeptCells kept{dim, {}};
+  KeptCells kept;
+  kept.dim = dim;
   kept.ids.reserve(g.num_cells);
   for (std::size_t c = 0; c < g.num_cells; ++c) {
     const int type = g.types[c];
