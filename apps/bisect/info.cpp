@@ -85,6 +85,12 @@ int run_info(const InfoArgs &a) {
     std::cout << "cell array: " << d.name << " (" << d.components << " components)\n";
   for (const DataArray &d : mesh.point_data)
     std::cout << "point array: " << d.name << " (" << d.components << " components)\n";
+  // Tagged lower-dimensional entities (README, "Files"), per dimension.
+  for (const Entities &b : mesh.entities)
+    std::cout << "tagged entities: " << b.size() << " of dimension " << b.dim << "\n";
+  for (const PhysicalName &n : mesh.physical_names)
+    std::cout << "physical name: " << n.name << " (dimension " << n.dim << ", tag " << n.tag
+              << ")\n";
   return kExitOk;
 }
 

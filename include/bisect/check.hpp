@@ -73,4 +73,10 @@ CheckResult check_refined(const Mesh &mesh, const Invariants &original);
 // its two sides (a boundary facet's centroid on another boundary facet).
 void prepare_input(Mesh &mesh, const std::string &path);
 
+// The index of the first entity of `block` (mesh.hpp, Entities) that is not a
+// face of some cell of `mesh` (ids out of range included), or
+// std::size_t(-1) when every one is. Linear: the entities are hashed, then
+// the cells' faces of the block's dimension looked up.
+std::size_t first_entity_not_a_face(const Mesh &mesh, const Entities &block);
+
 } // namespace bisect

@@ -102,6 +102,36 @@ inline bool is_label_array(const std::string &name) {
   return name == "colour" || name == "slice";
 }
 
+// Tagged lower-dimensional cells that travel with the mesh: boundary facets,
+// embedded (internal) surfaces, curves and points of Gmsh physical groups,
+// or the lower-dimensional cells of a .vtu grid. Each is a face of some
+// cell of the mesh (the readers check it). One block per dimension below the
+// mesh's, in increasing dimension; a mesh read without any has none.
+//  - vertices: dim+1 ids per entity, as in the file (order carries no
+//    meaning: bisection and the face lookups use the sorted ids);
+//  - data: one tuple per entity, e.g. gmsh:physical and gmsh:geometrical
+//    (Gmsh's physical and elementary tags) and the values of a .vtu's cell
+//    arrays for that cell.
+// refine() splits an entity with the cells it bounds (both halves keep its
+// data), coarsen() merges the halves back; code that renumbers vertices
+// (coarsening, the readers) keeps the ids right. Tools that build a new mesh
+// (extrude, slice, generate, colour's barycentric subdivision) drop them.
+struct Entities {
+  int dim = 0; // 0 points, 1 edges, 2 triangles, 3 tetrahedra (in 4D)
+  std::vector<VertexId> vertices;
+  std::vector<DataArray> data;
+  std::size_t size() const { return vertices.size() / std::size_t(dim + 1); }
+  const VertexId *entity(std::size_t i) const { return vertices.data() + i * std::size_t(dim + 1); }
+};
+
+// A name given to a physical tag of a dimension (Gmsh's $PhysicalNames,
+// meshio's field_data in a .vtu).
+struct PhysicalName {
+  int dim = 0;
+  int tag = 0;
+  std::string name;
+};
+
 struct Mesh {
   int dim = 0;                   // 2, 3 or 4: space dimension == cell dimension
   std::vector<double> coords;    // dim values per vertex
@@ -112,6 +142,8 @@ struct Mesh {
   std::unordered_map<std::uint64_t, std::uint32_t> edge_rank; // Marking::Explicit only
   std::vector<DataArray> point_data;
   std::vector<DataArray> cell_data;
+  std::vector<Entities> entities; // see Entities; usually empty
+  std::vector<PhysicalName> physical_names;
   // The bisection tree, what coarsening needs (ALGORITHMS.md §10). Either
   // both empty (no tree: every cell has generation 0 and every vertex is
   // original) or sized for the mesh: refine() fills them in (O(1) per

@@ -30,6 +30,7 @@
 #include "bisect/mark.hpp"
 #include "core/dimension.hpp"
 #include "core/numbering.hpp"
+#include "engine/entities.hpp"
 
 #include <algorithm>
 #include <unordered_set>
@@ -656,6 +657,7 @@ private:
   }
 
   void remove_vertices() {
+    merge_entities(m_, removed_);
     const std::size_t nv = m_.num_vertices();
     std::vector<VertexId> id(nv, kNoVertex);
     std::size_t w = 0;

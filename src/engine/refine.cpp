@@ -6,15 +6,21 @@
 // child 2 is appended. Midpoints are shared through a hash map from the edge
 // (sorted id pair) to the new vertex, cleared after every iteration: once an
 // iteration is conforming no cell has an edge that was bisected.
+//
+// Tagged entities (mesh.hpp) split with the cells: when a cell is bisected
+// at (a, b), its faces that are entities and hold a and b are replaced by
+// their halves (entities.hpp). A mesh without entities has no splitter.
 #include "bisect/refine.hpp"
 
 #include "bisect/mark.hpp"
 #include "core/dimension.hpp"
 #include "core/numbering.hpp"
+#include "engine/entities.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 namespace bisect {
@@ -115,6 +121,10 @@ public:
     // The undo log costs memory: keep it only when a limit could trip.
     logging_ = limits.max_cells != std::numeric_limits<std::size_t>::max() ||
                nv0_ + 16 * nc0_ >= limits.max_vertices || limits.cancel;
+    // Tagged entities split with their cells; a mesh without any has no
+    // splitter, and the kernel's only cost is testing the null pointer.
+    if (!m_.entities.empty())
+      splitter_ = std::make_unique<EntitySplitter>(m_);
   }
 
   RefineResult run(std::vector<CellId> work) {
@@ -126,6 +136,8 @@ public:
     for (CellId c : work)
       if (!logging_ && resolution(refinement_edge(c)) < 1024)
         logging_ = true;
+    if (logging_ && splitter_)
+      entities0_ = m_.entities; // what undo() puts back
     try {
       std::vector<std::uint8_t> flag;
       std::vector<std::uint64_t> seen;
@@ -301,6 +313,8 @@ private:
     if (s == Stage::Maubach) {
       VertexId c1[N], c2[N];
       VertexId z = midpoint(x[0], x[t]);
+      if (splitter_)
+        splitter_->split(x, N, x[0], x[t], z);
       maubach_children<Dim>(x, t, z, c1, c2);
       const int t2 = maubach_child_tag(t, Dim);
       std::copy(c1, c1 + N, m_.cell(c));
@@ -319,6 +333,8 @@ private:
     VertexId c1[N], c2[N];
     const EdgePick e = opposite_edge(order_, x, Dim, t);
     const VertexId z = midpoint(x[e.first], x[e.second]);
+    if (splitter_)
+      splitter_->split(x, N, x[e.first], x[e.second], z);
     Stage child_stage;
     int child_tag;
     opposite_children(order_, x, Dim, t, e, z, c1, c2, child_stage, child_tag);
@@ -343,6 +359,8 @@ private:
     m_.tag.resize(nc0_);
     m_.coords.resize(nv0_ * Dim);
     m_.cells.shrink_to_fit();
+    if (splitter_)
+      m_.entities = std::move(entities0_);
   }
 
   // Children inherit cell data; point data is interpolated at midpoints,
@@ -402,6 +420,8 @@ private:
   std::vector<CellId> origin_;         // per appended cell: the input cell it descends from
   std::vector<std::uint8_t> endpoint_; // per vertex: 1 if an end of an edge bisected so far
   std::vector<UndoEntry> log_;
+  std::unique_ptr<EntitySplitter> splitter_; // null for a mesh without entities
+  std::vector<Entities> entities0_;          // the entities before, when logging
 };
 
 template <int Dim>

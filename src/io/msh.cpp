@@ -15,7 +15,9 @@
 //    (integer tags: time step, components, number of entries), then entries
 //    "int tag, double values[components]" (binary in binary files).
 //
-// The reader keeps the linear simplices of the highest dimension; everything
+// The reader keeps the linear simplices of the highest dimension as cells,
+// and the lower-dimensional linear simplices of physical groups as tagged
+// entities (mesh.hpp; add_entities), with $PhysicalNames; everything
 // it rejects is reported as InputError(path, "line N: ...") for ASCII files
 // and "byte offset N: ..." for binary ones. A count read from the file never
 // reserves more than the rest of the file can hold, and every loop it drives
@@ -28,6 +30,7 @@
 // $Entities (when the file has $Entities; "gmsh:physical" only when some
 // cell's entity has a physical tag). The writer omits $Entities for a mesh
 // without these arrays, so that reading gives none back.
+#include "bisect/check.hpp"
 #include "bisect/io.hpp"
 #include "bisect/output.hpp"
 
@@ -139,8 +142,12 @@ ElementType element_type(long long type) {
   }
 }
 
+constexpr int kPoint = 15;
+constexpr int kLine = 1;
 constexpr int kTriangle = 2;
 constexpr int kTetrahedron = 4;
+// The linear simplex type of each dimension.
+constexpr int kSimplexType[4] = {kPoint, kLine, kTriangle, kTetrahedron};
 
 std::string type_text(long long type) {
   return "element type " + std::to_string(type) + " (" + element_type(type).name + ")";
@@ -407,6 +414,7 @@ struct Simplices {
   std::vector<std::uint32_t> nodes; // dim+1 node indices (into Nodes) each
   std::vector<long long> geom;      // elementary entity tag
   std::vector<long long> phys;      // physical tag (2.2 files)
+  std::vector<std::uint64_t> tag;   // element tag (to name it in errors)
   std::size_t size() const { return geom.size(); }
 };
 
@@ -447,7 +455,7 @@ struct MshFile {
   Simplices simplices[4];
   std::vector<ElementRef> elements;
   int top_dim = -1;                              // highest dimension among simplices of any order
-  bool tags22[4] = {false, false, false, false}; // a 2.2 triangle/tet carried >= 2 tags
+  bool tags22[4] = {false, false, false, false}; // a 2.2 linear simplex carried >= 2 tags
   Sighting non_simplex[4];                       // quads, hexahedra, prisms, pyramids per dimension
   Sighting higher_order[4];                      // curved simplices per dimension
   std::size_t off_plane_at = kNone;              // first triangle with a node off z = 0
@@ -455,6 +463,7 @@ struct MshFile {
   bool have_entities = false;
   std::map<std::pair<int, long long>, long long> first_physical; // (dim, entity) -> tag or 0
   std::vector<DataBlock> data;
+  std::vector<PhysicalName> physical_names;
 };
 
 // ---------------------------------------------------------------------------
@@ -652,7 +661,8 @@ void add_element(Source &src, MshFile &f, std::uint64_t tag, long long type, con
   ElementRef ref{tag, at, et.dim, kNoIndex};
   if (et.simplex && et.dim >= 2)
     f.top_dim = std::max(f.top_dim, et.dim);
-  if (type == kTriangle || type == kTetrahedron) {
+  if (type == kTriangle || type == kTetrahedron || type == kLine || type == kPoint) {
+    // Cells, or (below the cell dimension) tagged entities.
     Simplices &s = f.simplices[et.dim];
     if (s.size() >= kNoIndex - 1)
       src.fail(at, "too many cells (more than 2^32 - 2)");
@@ -660,6 +670,7 @@ void add_element(Source &src, MshFile &f, std::uint64_t tag, long long type, con
     s.nodes.insert(s.nodes.end(), idx, idx + et.nodes);
     s.geom.push_back(geom);
     s.phys.push_back(phys);
+    s.tag.push_back(tag);
     if (type == kTriangle && f.off_plane_at == kNone)
       for (int k = 0; k < 3; ++k) {
         const double z = f.nodes.xyz[3 * std::size_t(idx[k]) + 2];
@@ -699,8 +710,8 @@ void read_elements22(Source &src, MshFile &f) {
   const std::uint64_t total = src.count("the number of elements");
   f.elements.reserve(src.affordable(total, 8));
   std::vector<std::uint64_t> node_tags;
-  auto note_tags = [&](const ElementType &et, std::uint64_t ntags, long long type) {
-    if (ntags >= 2 && (type == kTriangle || type == kTetrahedron))
+  auto note_tags = [&](const ElementType &et, std::uint64_t ntags, long long) {
+    if (ntags >= 2 && et.simplex && et.linear)
       f.tags22[et.dim] = true;
   };
   if (src.binary) {
@@ -902,6 +913,25 @@ void read_data(Source &src, MshFile &f, bool on_nodes, std::size_t section_at) {
   keep_data(src, f, std::move(b));
 }
 
+// $PhysicalNames (text in binary files too): count, then "dim tag "name""
+// per line. Names keep their spaces; the quotes go.
+void read_physical_names(Source &src, MshFile &f) {
+  const std::uint64_t n = src.count("the number of physical names");
+  for (std::uint64_t i = 0; i < n; ++i) {
+    const std::size_t at = src.mark();
+    const long long dim = src.integer("a physical name's dimension");
+    if (dim < 0 || dim > 3)
+      src.fail(at, "physical name dimension " + std::to_string(dim) + " is not 0..3");
+    const long long tag = src.integer("a physical tag");
+    src.skip_space();
+    std::string_view name = src.line("a physical name");
+    if (name.size() >= 2 && name.front() == '"' && name.back() == '"')
+      name = name.substr(1, name.size() - 2);
+    f.physical_names.push_back({int(dim), int(tag), std::string(name)});
+  }
+  src.expect_end("PhysicalNames");
+}
+
 MshFile parse(Source &src) {
   MshFile f;
   const std::string_view first = src.token("$MeshFormat");
@@ -935,8 +965,10 @@ MshFile parse(Source &src) {
       read_entities41(src, f);
     } else if (name == "NodeData" || name == "ElementData") {
       read_data(src, f, name == "NodeData", at);
+    } else if (name == "PhysicalNames") {
+      read_physical_names(src, f);
     } else {
-      src.skip_section(name, at); // $PhysicalNames, $Periodic, $Comments, ...
+      src.skip_section(name, at); // $Periodic, $Comments, ...
     }
   }
   if (!f.nodes.read)
@@ -1058,6 +1090,57 @@ DataArray cell_array(Source &src, const MshFile &f, const DataBlock &b, int dim)
   return a;
 }
 
+// The elements of dimension below the mesh's that belong to a physical group
+// (2.2: physical tag != 0; 4.1: their entity has a physical tag) become
+// tagged entities with gmsh:physical and gmsh:geometrical; each must be a
+// face of some cell. Elements outside any physical group are Gmsh's mesh of
+// the geometry's boundary, which nothing asked to keep: they go.
+void add_entities(Source &src, const MshFile &f, const std::vector<VertexId> &vertex_of, Mesh &m) {
+  static const char *const kNames[4] = {"point", "line", "triangle", "tetrahedron"};
+  for (int d = 0; d < m.dim; ++d) {
+    const Simplices &s = f.simplices[d];
+    const std::size_t nvs = std::size_t(d + 1);
+    Entities block;
+    block.dim = d;
+    DataArray phys{"gmsh:physical", 1, {}, ValueType::Int32};
+    DataArray geom{"gmsh:geometrical", 1, {}, ValueType::Int32};
+    std::vector<std::size_t> source; // the element of each entity
+    for (std::size_t e = 0; e < s.size(); ++e) {
+      long long p = 0;
+      if (f.version == 22) {
+        p = f.tags22[d] ? s.phys[e] : 0;
+      } else {
+        const auto it = f.first_physical.find({d, s.geom[e]});
+        p = it == f.first_physical.end() ? 0 : it->second;
+      }
+      if (p == 0)
+        continue;
+      for (std::size_t k = 0; k < nvs; ++k)
+        block.vertices.push_back(vertex_of[s.nodes[e * nvs + k]]); // kNoVertex: not a face
+      phys.values.push_back(double(p));
+      geom.values.push_back(double(s.geom[e]));
+      source.push_back(e);
+    }
+    if (source.empty())
+      continue;
+    block.data.push_back(std::move(phys));
+    block.data.push_back(std::move(geom));
+    const std::size_t bad = first_entity_not_a_face(m, block);
+    if (bad != std::size_t(-1)) {
+      const std::size_t e = source[bad];
+      std::size_t at = f.elements_at;
+      for (const ElementRef &r : f.elements) // sorted by tag
+        if (r.tag == s.tag[e])
+          at = r.at;
+      src.fail(at, "element " + std::to_string(s.tag[e]) + " (" + kNames[d] + ", physical " +
+                       std::to_string((long long)block.data[0].values[bad]) +
+                       ") is not a face of the mesh");
+    }
+    m.entities.push_back(std::move(block));
+  }
+  m.physical_names = f.physical_names;
+}
+
 Mesh assemble(Source &src, MshFile &f) {
   reject_duplicate_elements(src, f);
   const int dim = cell_dimension(src, f);
@@ -1121,6 +1204,7 @@ Mesh assemble(Source &src, MshFile &f) {
       a.values = std::move(values);
     }
   }
+  add_entities(src, f, vertex_of, m);
   return m;
 }
 
@@ -1212,25 +1296,56 @@ void check_writable(const std::string &path, const Mesh &mesh) {
     check(a, nv, "point");
   for (const DataArray &a : mesh.cell_data)
     check(a, nc, "cell");
+  std::size_t elements = nc;
+  for (const Entities &b : mesh.entities) {
+    if (b.dim < 0 || b.dim >= mesh.dim || b.vertices.size() % std::size_t(b.dim + 1))
+      throw InputError(path, "a block of tagged entities of dimension " + std::to_string(b.dim) +
+                                 " is malformed");
+    for (VertexId v : b.vertices)
+      if (v >= nv)
+        throw InputError(path, "a tagged entity refers to vertex " + std::to_string(v) + " of " +
+                                   std::to_string(nv));
+    for (const DataArray &a : b.data)
+      check(a, b.size(), "entity");
+    elements += b.size();
+  }
+  if (elements > std::size_t(INT_MAX))
+    throw InputError(path, "too many elements for a .msh file (at most 2^31 - 1)");
+  for (const PhysicalName &n : mesh.physical_names)
+    if (n.name.find_first_of("\r\n\"") != std::string::npos)
+      throw InputError(path, "physical name " + quoted(n.name) +
+                                 " contains a line break or a double quote");
 }
 
 // A scalar cell array that becomes Gmsh entity information, or null.
-const DataArray *entity_array(const Mesh &mesh, const std::string &name) {
-  for (const DataArray &a : mesh.cell_data)
+const DataArray *entity_array(const std::vector<DataArray> &arrays, const std::string &name) {
+  for (const DataArray &a : arrays)
     if (a.name == name && a.components == 1)
       return &a;
   return nullptr;
 }
 
-long long tag_value(const std::string &path, const DataArray *a, std::size_t c) {
+long long tag_value(const std::string &path, const DataArray *a, std::size_t c, const char *what) {
   if (!a)
     return 0;
   const double v = a->values[c];
   if (!(v == std::floor(v)) || v < INT_MIN || v > INT_MAX)
-    throw InputError(path, "cell array " + quoted(a->name) + " holds " + std::to_string(v) +
-                               " at cell " + std::to_string(c) + ", which is not an integer tag");
+    throw InputError(path, std::string(what) + " array " + quoted(a->name) + " holds " +
+                               std::to_string(v) + " at " + what + " " + std::to_string(c) +
+                               ", which is not an integer tag");
   return (long long)v;
 }
+
+// The simplices of one dimension that go into the file: the cells, or one
+// block of tagged entities. Element tags are first_tag + 1, first_tag + 2, ...
+struct SimplexSet {
+  int dim = 0;
+  std::size_t count = 0;
+  const VertexId *ids = nullptr; // dim+1 per simplex
+  const DataArray *geom = nullptr, *phys = nullptr;
+  std::size_t first_tag = 0;
+  const char *what = "cell"; // names a simplex in errors
+};
 
 struct Entity {
   long long tag = 0;
@@ -1258,19 +1373,20 @@ struct EntityPlan {
 // One entity per distinct (geometrical, physical) pair, tagged with the
 // geometrical tag unless another pair already took it; one element block per
 // entity, as Gmsh itself writes them.
-EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const DataArray *geom,
-                         const DataArray *phys) {
+EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const SimplexSet &set) {
   EntityPlan plan;
-  const std::size_t nc = mesh.num_cells();
+  const std::size_t nc = set.count;
+  const DataArray *geom = set.geom, *phys = set.phys;
+  const int nvs = set.dim + 1;
   long long next_tag = 1;
   if (geom)
     for (std::size_t c = 0; c < nc; ++c)
-      next_tag = std::max(next_tag, tag_value(path, geom, c) + 1);
+      next_tag = std::max(next_tag, tag_value(path, geom, c, set.what) + 1);
   std::map<std::pair<long long, long long>, std::size_t> entity_of;
   std::set<long long> taken;
   std::vector<std::size_t> entity_of_cell(nc);
   for (std::size_t c = 0; c < nc; ++c) {
-    const long long g = tag_value(path, geom, c), p = tag_value(path, phys, c);
+    const long long g = tag_value(path, geom, c, set.what), p = tag_value(path, phys, c, set.what);
     auto [it, added] = entity_of.emplace(std::make_pair(g, p), plan.entities.size());
     if (added) {
       Entity e;
@@ -1282,8 +1398,8 @@ EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const DataAr
       plan.entities.push_back(e);
     }
     Entity &e = plan.entities[it->second];
-    for (int k = 0; k <= mesh.dim; ++k) {
-      const double *x = mesh.point(mesh.cell(CellId(c))[k]);
+    for (int k = 0; k < nvs; ++k) {
+      const double *x = mesh.point(set.ids[c * std::size_t(nvs) + std::size_t(k)]);
       for (int i = 0; i < 3; ++i) {
         const double xi = i < mesh.dim ? x[i] : 0.0;
         e.lo[i] = std::min(e.lo[i], xi);
@@ -1307,20 +1423,27 @@ EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const DataAr
   return plan;
 }
 
-void write_entities(Output &out, int dim, const EntityPlan &plan) {
+// plans[d]: the Gmsh entities of dimension d (points have a point, not a box).
+void write_entities(Output &out, const EntityPlan *const plans[4]) {
   out.text("$Entities\n");
   for (int d = 0; d < 4; ++d)
-    out.size(d == dim ? plan.entities.size() : 0);
-  for (const Entity &e : plan.entities) {
-    out.int32(e.tag);
-    for (double x : e.lo)
-      out.raw<double>(x);
-    for (double x : e.hi)
-      out.raw<double>(x);
-    out.size(e.physical != 0 ? 1 : 0);
-    if (e.physical != 0)
-      out.int32(e.physical);
-    out.size(0); // no bounding entities
+    out.size(plans[d] ? plans[d]->entities.size() : 0);
+  for (int d = 0; d < 4; ++d) {
+    if (!plans[d])
+      continue;
+    for (const Entity &e : plans[d]->entities) {
+      out.int32(e.tag);
+      for (double x : e.lo)
+        out.raw<double>(x);
+      if (d > 0)
+        for (double x : e.hi)
+          out.raw<double>(x);
+      out.size(e.physical != 0 ? 1 : 0);
+      if (e.physical != 0)
+        out.int32(e.physical);
+      if (d > 0)
+        out.size(0); // no bounding entities
+    }
   }
   out.text("\n$EndEntities\n");
 }
@@ -1359,26 +1482,48 @@ void write_nodes(Output &out, const Mesh &mesh, long long entity) {
   out.text("\n$EndNodes\n");
 }
 
-void write_elements(Output &out, const Mesh &mesh, const EntityPlan &plan) {
-  const std::size_t nc = mesh.num_cells();
+// The cells (sets[0]) and the entity blocks, each set's element blocks in
+// its plan's order.
+void write_elements(Output &out, const std::vector<SimplexSet> &sets,
+                    const std::vector<EntityPlan> &plans) {
+  std::size_t blocks = 0, total = 0;
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    blocks += plans[i].blocks.size();
+    total += sets[i].count;
+  }
   out.text("$Elements\n");
-  out.size(plan.blocks.size());
-  out.size(nc);
-  out.size(nc ? 1 : 0);
-  out.size(nc);
-  for (const Block &b : plan.blocks) {
-    out.int32(mesh.dim);
-    out.int32(plan.entities[b.entity].tag);
-    out.int32(mesh.dim == 2 ? kTriangle : kTetrahedron);
-    out.size(b.count);
-    for (std::size_t i = b.first; i < b.first + b.count; ++i) {
-      const std::size_t c = plan.order[i];
-      out.size(c + 1);
-      for (int k = 0; k <= mesh.dim; ++k)
-        out.size(std::uint64_t(mesh.cell(CellId(c))[k]) + 1);
+  out.size(blocks);
+  out.size(total);
+  out.size(total ? 1 : 0);
+  out.size(total);
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const SimplexSet &set = sets[i];
+    const std::size_t nvs = std::size_t(set.dim + 1);
+    for (const Block &b : plans[i].blocks) {
+      out.int32(set.dim);
+      out.int32(plans[i].entities[b.entity].tag);
+      out.int32(kSimplexType[set.dim]);
+      out.size(b.count);
+      for (std::size_t j = b.first; j < b.first + b.count; ++j) {
+        const std::size_t c = plans[i].order[j];
+        // Cells: tag = index + 1 (the cell order survives a round trip).
+        // Entities: tags in file order, which meshio's binary $ElementData
+        // reader needs (whose order is of no concern).
+        out.size(set.first_tag + (i == 0 ? c : j) + 1);
+        for (std::size_t k = 0; k < nvs; ++k)
+          out.size(std::uint64_t(set.ids[c * nvs + k]) + 1);
+      }
     }
   }
   out.text("\n$EndElements\n");
+}
+
+// $PhysicalNames is text in binary files too.
+void write_physical_names(Output &out, const std::vector<PhysicalName> &names) {
+  out.text("$PhysicalNames\n" + std::to_string(names.size()) + "\n");
+  for (const PhysicalName &n : names)
+    out.text(std::to_string(n.dim) + " " + std::to_string(n.tag) + " \"" + n.name + "\"\n");
+  out.text("$EndPhysicalNames\n");
 }
 
 // One $NodeData/$ElementData section: time 0, time step 0. Row i is entity
@@ -1397,6 +1542,40 @@ void write_data(Output &out, const std::string &section, const DataArray &a, std
   out.text("\n$End" + section + "\n");
 }
 
+// A cell array as $ElementData. With tagged entities the section lists them
+// too (meshio pairs element data with every element by position): an
+// entity's own value of the array (same name and components) or 0. Readers
+// that go by tags, ours included, ignore those rows.
+void write_element_data(Output &out, const DataArray &a, const std::vector<SimplexSet> &sets,
+                        const std::vector<EntityPlan> &plans, const std::vector<Entities> &blocks) {
+  if (sets.size() == 1)
+    return write_data(out, "ElementData", a, sets[0].count, plans[0].order);
+  std::size_t n = 0;
+  for (const SimplexSet &set : sets)
+    n += set.count;
+  out.text("$ElementData\n1\n\"" + a.name + "\"\n1\n0\n3\n0\n" + std::to_string(a.components) +
+           "\n" + std::to_string(n) + "\n");
+  const std::size_t nc = std::size_t(a.components);
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const DataArray *own = &a;
+    if (i > 0) { // sets[i] is the block of entities whose vertices it points at
+      own = nullptr;
+      for (const Entities &b : blocks)
+        if (b.vertices.data() == sets[i].ids)
+          for (const DataArray &e : b.data)
+            if (e.name == a.name && e.components == a.components)
+              own = &e;
+    }
+    for (std::size_t j = 0; j < sets[i].count; ++j) {
+      const std::size_t row = plans[i].order[j];
+      out.int32((long long)(sets[i].first_tag + (i == 0 ? row : j) + 1));
+      for (std::size_t k = 0; k < nc; ++k)
+        out.raw<double>(own ? own->values[row * nc + k] : 0.0);
+    }
+  }
+  out.text("\n$EndElementData\n");
+}
+
 } // namespace
 
 Mesh read_msh(const std::string &path) {
@@ -1407,24 +1586,54 @@ Mesh read_msh(const std::string &path) {
 
 void write_msh(const std::string &path, const Mesh &mesh) {
   check_writable(path, mesh);
-  const DataArray *geom = entity_array(mesh, "gmsh:geometrical");
-  const DataArray *phys = entity_array(mesh, "gmsh:physical");
-  const EntityPlan plan = plan_entities(path, mesh, geom, phys);
+  const DataArray *geom = entity_array(mesh.cell_data, "gmsh:geometrical");
+  const DataArray *phys = entity_array(mesh.cell_data, "gmsh:physical");
+  // The cells, then the tagged entities, lowest dimension first.
+  std::vector<SimplexSet> sets{{mesh.dim, mesh.num_cells(), mesh.cells.data(), geom, phys, 0}};
+  std::size_t tags = mesh.num_cells();
+  std::vector<const Entities *> blocks;
+  for (const Entities &b : mesh.entities)
+    if (b.size() > 0)
+      blocks.push_back(&b);
+  std::stable_sort(blocks.begin(), blocks.end(),
+                   [](const Entities *p, const Entities *q) { return p->dim < q->dim; });
+  for (const Entities *b : blocks) {
+    sets.push_back({b->dim, b->size(), b->vertices.data(),
+                    entity_array(b->data, "gmsh:geometrical"),
+                    entity_array(b->data, "gmsh:physical"), tags, "entity"});
+    tags += b->size();
+  }
+  std::vector<EntityPlan> plans;
+  for (const SimplexSet &set : sets)
+    plans.push_back(plan_entities(path, mesh, set));
+  // Two entity blocks of one dimension (not what the readers make) share
+  // the dimension's Gmsh entities: merged into the first plan's numbering
+  // would take more code than such a mesh deserves, so they are refused.
+  const EntityPlan *by_dim[4] = {nullptr, nullptr, nullptr, nullptr};
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    if (by_dim[sets[i].dim])
+      throw InputError(path, "two blocks of tagged entities of dimension " +
+                                 std::to_string(sets[i].dim) + " (one per dimension)");
+    by_dim[sets[i].dim] = &plans[i];
+  }
   Output out(path);
   out.text("$MeshFormat\n4.1 1 8\n");
   out.int32(1); // the endianness check
   out.text("\n$EndMeshFormat\n");
-  // Without tag arrays there is no $Entities: reading gives no tag arrays back.
-  if (geom || phys)
-    write_entities(out, mesh.dim, plan);
-  write_nodes(out, mesh, plan.entities.empty() ? 1 : plan.entities.front().tag);
-  write_elements(out, mesh, plan);
+  if (!mesh.physical_names.empty())
+    write_physical_names(out, mesh.physical_names);
+  // Without tag arrays or entities there is no $Entities: reading gives no
+  // tag arrays back.
+  if (geom || phys || sets.size() > 1)
+    write_entities(out, by_dim);
+  write_nodes(out, mesh, plans[0].entities.empty() ? 1 : plans[0].entities.front().tag);
+  write_elements(out, sets, plans);
   for (const DataArray &a : mesh.point_data)
     if (&a != plane_z_of(mesh))
       write_data(out, "NodeData", a, mesh.num_vertices());
   for (const DataArray &a : mesh.cell_data)
     if (&a != geom && &a != phys)
-      write_data(out, "ElementData", a, mesh.num_cells(), plan.order);
+      write_element_data(out, a, sets, plans, mesh.entities);
   out.close();
 }
 

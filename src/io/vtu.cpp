@@ -9,11 +9,18 @@
 //    array "t" (Float64, 1 component) holds the 4th coordinate; every
 //    pentatope is one VTK_POLY_VERTEX cell with 5 ids (VTK_CONVEX_POINT_SET
 //    with 5 ids is accepted on reading).
+//  - Tagged entities (mesh.hpp): lower-dimensional simplex cells (vertex,
+//    line, triangle, tetra below the cell dimension) after the volume cells,
+//    with their rows of the cell arrays; physical names as integer field
+//    data (tag, dimension), meshio's convention.
+#include "bisect/check.hpp"
 #include "bisect/io.hpp"
 #include "bisect/output.hpp"
 #include "io/vtu_read.hpp"
 #include "io/vtu_write.hpp"
 
+#include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -99,14 +106,37 @@ bool is_4d(const vtu::Grid &g) {
   return sd && sd->numeric && !sd->values.empty() && sd->values[0] == 4.0;
 }
 
-// The cells kept by the reader (file ids) and the dimension they define.
+// The cells kept by the reader (file ids) and the dimension they define;
+// the lower-dimensional simplices (VTK vertex, line, triangle, tetra below
+// the cell dimension) that become tagged entities (mesh.hpp), per dimension.
 struct KeptCells {
   int dim = 0;
   std::vector<CellId> ids;
+  std::vector<CellId> entity_ids[4];
 };
 
+constexpr int kVertex = 1, kLine = 3;
+
+// The dimension of a simplex cell type (vertex, line, triangle, tetra), -1
+// for the others.
+int simplex_dim(int type) {
+  switch (type) {
+  case kVertex:
+    return 0;
+  case kLine:
+    return 1;
+  case kTriangle:
+    return 2;
+  case kTetra:
+    return 3;
+  default:
+    return -1;
+  }
+}
+
 KeptCells select_cells_4d(const std::string &path, const vtu::Grid &g) {
-  KeptCells kept{4, {}};
+  KeptCells kept;
+  kept.dim = 4;
   for (std::size_t c = 0; c < g.num_cells; ++c) {
     const int type = g.types[c];
     const std::int64_t npts = g.offsets[c + 1] - g.offsets[c];
@@ -115,9 +145,10 @@ KeptCells select_cells_4d(const std::string &path, const vtu::Grid &g) {
         throw InputError(path, "4D mesh: cell " + std::to_string(c) + " has " +
                                    std::to_string(npts) + " vertices, expected 5");
       kept.ids.push_back(CellId(c));
-    } else if (type != 1 && type != 3 && type != kTriangle && type != kTetra) {
-      // Lower-dimensional simplices (boundary pieces) are ignored; anything
-      // else cannot be part of a pentatope mesh.
+    } else if (const int d = simplex_dim(type); d >= 0) {
+      kept.entity_ids[d].push_back(CellId(c)); // a tagged boundary piece
+    } else {
+      // Anything else cannot be part of a pentatope mesh.
       throw InputError(path, "4D mesh: cell " + std::to_string(c) + " has VTK type " +
                                  std::to_string(type) +
                                  ", expected a 5-vertex poly-vertex (type 2)");
@@ -128,8 +159,9 @@ KeptCells select_cells_4d(const std::string &path, const vtu::Grid &g) {
   return kept;
 }
 
-// Keeps the simplices of the highest dimension; lower-dimensional cells are
-// ignored, a non-simplex cell of that dimension or higher is an error.
+// Keeps the simplices of the highest dimension and, as entities, the lower-
+// dimensional simplices; other lower-dimensional cells are ignored, a
+// non-simplex cell of that dimension or higher is an error.
 KeptCells select_cells(const std::string &path, const vtu::Grid &g) {
   int dim = 0;
   for (std::size_t c = 0; c < g.num_cells; ++c) {
@@ -147,7 +179,8 @@ KeptCells select_cells(const std::string &path, const vtu::Grid &g) {
     throw InputError(path, "no triangles or tetrahedra");
   }
   const int simplex = dim == 2 ? kTriangle : kTetra;
-  KeptCells kept{dim, {}};
+  KeptCells kept;
+  kept.dim = dim;
   kept.ids.reserve(g.num_cells);
   for (std::size_t c = 0; c < g.num_cells; ++c) {
     const int type = g.types[c];
@@ -155,6 +188,9 @@ KeptCells select_cells(const std::string &path, const vtu::Grid &g) {
       kept.ids.push_back(CellId(c));
     else if (linear_cell(type)->dim >= dim)
       throw InputError(path, "mixed non-simplex cells (VTK type " + std::to_string(type) + ")");
+    else if (const int d = simplex_dim(type); d >= 0)
+      kept.entity_ids[d].push_back(CellId(c));
+    // (other lower-dimensional cells, e.g. quads or poly-lines, are ignored)
   }
   return kept;
 }
@@ -204,6 +240,59 @@ const vtu::Array &time_array(const std::string &path, const vtu::Grid &g) {
     throw InputError(path, "4D mesh: point data array 't' has " + std::to_string(t->components) +
                                " components, expected 1");
   return *t; // one value per point: the reader checked the count
+}
+
+// The lower-dimensional simplices as tagged entities, each with its rows of
+// the numeric cell arrays, except the bisect:* arrays (the state of volume
+// cells; 0 in an entity's rows) and float arrays that are NaN in every row
+// of the block (what the writer pads an entity's missing array with). Each
+// must be a face of some cell.
+void add_entities(const std::string &path, vtu::Grid &g, const KeptCells &kept,
+                  const std::vector<VertexId> &new_id, Mesh &mesh) {
+  static const char *const kNames[4] = {"vertex", "line", "triangle", "tetra"};
+  for (int d = 0; d < kept.dim; ++d) {
+    const std::vector<CellId> &ids = kept.entity_ids[d];
+    if (ids.empty())
+      continue;
+    Entities block;
+    block.dim = d;
+    block.vertices.reserve(ids.size() * std::size_t(d + 1));
+    for (CellId c : ids) {
+      const std::uint32_t *pts = g.connectivity.data() + g.offsets[c];
+      for (int k = 0; k <= d; ++k)
+        block.vertices.push_back(new_id[pts[k]]); // kNoVertex: not a face
+    }
+    const std::size_t bad = first_entity_not_a_face(mesh, block);
+    if (bad != std::size_t(-1))
+      throw InputError(path, "cell " + std::to_string(ids[bad]) + " (" + kNames[d] +
+                                 ") is not a face of the mesh");
+    for (std::size_t i = 0; i < g.cell_data.size(); ++i) {
+      vtu::Array &a = g.cell_data[i];
+      const std::string name = array_name(a, i);
+      if (!a.numeric || name.rfind("bisect:", 0) == 0)
+        continue;
+      DataArray rows = take_rows(a, name, ids, false);
+      if (std::all_of(rows.values.begin(), rows.values.end(),
+                      [](double v) { return std::isnan(v); }))
+        continue;
+      block.data.push_back(std::move(rows));
+    }
+    mesh.entities.push_back(std::move(block));
+  }
+}
+
+// Field data in meshio's convention for physical names (what meshio keeps
+// from a Gmsh file's $PhysicalNames): an integer array named after the
+// group holding (tag, dimension).
+void add_physical_names(const vtu::Grid &g, Mesh &mesh) {
+  for (const vtu::Array &a : g.field_data) {
+    if (!a.numeric || a.values.size() != 2 || a.name.empty() || a.name == "SpatialDimension" ||
+        !is_integer_type(value_type_named(a.type)))
+      continue;
+    const double tag = a.values[0], dim = a.values[1];
+    if (dim >= 0 && dim <= mesh.dim && tag >= INT_MIN && tag <= INT_MAX)
+      mesh.physical_names.push_back({int(dim), int(tag), a.name});
+  }
 }
 
 Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
@@ -289,11 +378,13 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
       continue;
     mesh.point_data.push_back(take_rows(a, array_name(a, i), used, all_points));
   }
+  add_entities(path, g, kept, new_id, mesh); // before the cell arrays are moved
   for (std::size_t i = 0; i < g.cell_data.size(); ++i) {
     vtu::Array &a = g.cell_data[i];
     if (a.numeric)
       mesh.cell_data.push_back(take_rows(a, array_name(a, i), kept.ids, all_cells));
   }
+  add_physical_names(g, mesh);
   return mesh;
 }
 
@@ -316,6 +407,16 @@ void check_mesh_for_writing(const std::string &path, const Mesh &mesh) {
   for (const auto &a : mesh.cell_data)
     if (a.components < 1 || a.values.size() != nc * a.components)
       fail("cell array '" + a.name + "' does not have one tuple per cell");
+  for (const Entities &b : mesh.entities) {
+    if (b.dim < 0 || b.dim >= mesh.dim || b.vertices.size() % std::size_t(b.dim + 1))
+      fail("a block of tagged entities of dimension " + std::to_string(b.dim) + " is malformed");
+    for (VertexId v : b.vertices)
+      if (v >= nv)
+        fail("a tagged entity refers to vertex " + std::to_string(v) + " of " + std::to_string(nv));
+    for (const auto &a : b.data)
+      if (a.components < 1 || a.values.size() != b.size() * a.components)
+        fail("entity array '" + a.name + "' does not have one tuple per entity");
+  }
   if (mesh.dim == 4)
     for (const auto &a : mesh.point_data)
       if (a.name == "t")

@@ -364,12 +364,77 @@ void write_typed(Writer &w, VtuCompression compression, int level, const DataArr
   put(double{});
 }
 
+// The cell arrays of a mesh with tagged entities, which follow the volume
+// cells as lower-dimensional cells of the grid: every array of the cells or
+// of some entity block, with a row per cell and per entity. An entity's own
+// value where its block has the array (same components), else 0 for an
+// integer array (bisect:state and the other state arrays included) and NaN
+// for a float one; cells lacking an entity array get the same padding.
+std::vector<DataArray> cell_arrays_with_entities(const Mesh &mesh) {
+  std::vector<const DataArray *> firsts; // one per name, cells' arrays first
+  auto note = [&](const DataArray &a) {
+    for (const DataArray *f : firsts)
+      if (f->name == a.name)
+        return;
+    firsts.push_back(&a);
+  };
+  for (const DataArray &a : mesh.cell_data)
+    note(a);
+  for (const Entities &b : mesh.entities)
+    for (const DataArray &a : b.data)
+      note(a);
+  auto same_array = [](const std::vector<DataArray> &arrays, const DataArray &like) {
+    for (const DataArray &a : arrays)
+      if (a.name == like.name && a.components == like.components)
+        return &a;
+    return static_cast<const DataArray *>(nullptr);
+  };
+  std::vector<DataArray> out;
+  for (const DataArray *f : firsts) {
+    DataArray a{f->name, f->components, {}, f->type};
+    const bool integer =
+        is_integer_type(f->type) || (f->type == ValueType::Unknown && fits_int32(f->values));
+    const double pad = integer ? 0.0 : std::numeric_limits<double>::quiet_NaN();
+    const std::size_t k = std::size_t(a.components);
+    auto append = [&](const DataArray *own, std::size_t rows) {
+      if (own)
+        a.values.insert(a.values.end(), own->values.begin(), own->values.end());
+      else
+        a.values.insert(a.values.end(), rows * k, pad);
+    };
+    append(same_array(mesh.cell_data, *f), mesh.num_cells());
+    for (const Entities &b : mesh.entities)
+      append(same_array(b.data, *f), b.size());
+    if (a.type == ValueType::Unknown && !integer)
+      a.type = ValueType::Float64; // NaN padding must not be guessed as Int32
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
+// Physical names as field data in meshio's convention: an Int32 array named
+// after the group, holding (tag, dimension).
+void write_physical_names(Writer &w, VtuCompression compression, int level, const Mesh &mesh) {
+  for (const PhysicalName &n : mesh.physical_names)
+    write_array<std::int32_t>(
+        w, compression, level, n.name, 1, 2,
+        [&](std::size_t i) { return std::int32_t(i == 0 ? n.tag : n.dim); },
+        " NumberOfTuples=\"2\"");
+}
+
 } // namespace
 
 void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression compression,
                       int level) {
-  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  const std::size_t nv = mesh.num_vertices(), ncells = mesh.num_cells();
   const int dim = mesh.dim, nvc = dim + 1;
+  // Tagged entities are cells of the grid after the volume cells.
+  std::size_t nentities = 0, entity_ids = 0;
+  for (const Entities &b : mesh.entities) {
+    nentities += b.size();
+    entity_ids += b.vertices.size();
+  }
+  const std::size_t nc = ncells + nentities;
   Writer w(path);
   w.text("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
          "byte_order=\"LittleEndian\" header_type=\"UInt64\"");
@@ -378,11 +443,13 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
   if (compression == VtuCompression::Lz4)
     w.text(" compressor=\"vtkLZ4DataCompressor\"");
   w.text(">\n  <UnstructuredGrid>\n");
-  if (dim == 4) {
+  if (dim == 4 || !mesh.physical_names.empty()) {
     w.text("    <FieldData>\n");
-    write_array<std::int32_t>(
-        w, compression, level, "SpatialDimension", 1, 1,
-        [](std::size_t) { return std::int32_t(4); }, " NumberOfTuples=\"1\"");
+    if (dim == 4)
+      write_array<std::int32_t>(
+          w, compression, level, "SpatialDimension", 1, 1,
+          [](std::size_t) { return std::int32_t(4); }, " NumberOfTuples=\"1\"");
+    write_physical_names(w, compression, level, mesh);
     w.text("    </FieldData>\n");
   }
   w.text("    <Piece NumberOfPoints=\"" + std::to_string(nv) + "\" NumberOfCells=\"" +
@@ -400,8 +467,12 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
     write_array<double>(w, compression, level, "t", 1, nv,
                         [&](std::size_t v) { return mesh.coords[v * 4 + 3]; });
   w.text("      </PointData>\n      <CellData>\n");
-  for (const DataArray &a : mesh.cell_data)
-    write_typed(w, compression, level, a, true);
+  if (nentities == 0)
+    for (const DataArray &a : mesh.cell_data)
+      write_typed(w, compression, level, a, true);
+  else
+    for (const DataArray &a : cell_arrays_with_entities(mesh))
+      write_typed(w, compression, level, a, true);
   w.text("      </CellData>\n      <Points>\n");
   write_array<double>(w, compression, level, "Points", 3, 3 * nv, [&](std::size_t i) {
     const std::size_t v = i / 3, k = i % 3;
@@ -410,14 +481,33 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
     return plane_z ? plane_z->values[v] : 0.0;
   });
   w.text("      </Points>\n      <Cells>\n");
-  write_array<std::int64_t>(w, compression, level, "connectivity", 1, mesh.cells.size(),
-                            [&](std::size_t i) { return std::int64_t(mesh.cells[i]); });
+  // The entities' ids, offsets and types in grid order (only when there are any).
+  std::vector<std::int64_t> entity_conn, entity_offsets;
+  std::vector<std::uint8_t> entity_types;
+  entity_conn.reserve(entity_ids);
+  std::int64_t end = std::int64_t(mesh.cells.size());
+  for (const Entities &b : mesh.entities) {
+    static const std::uint8_t kSimplexType[4] = {1, 3, 5, 10}; // vertex, line, triangle, tetra
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      for (int k = 0; k <= b.dim; ++k)
+        entity_conn.push_back(std::int64_t(b.entity(i)[k]));
+      end += b.dim + 1;
+      entity_offsets.push_back(end);
+      entity_types.push_back(kSimplexType[b.dim]);
+    }
+  }
+  const std::size_t ncell_ids = mesh.cells.size();
+  write_array<std::int64_t>(
+      w, compression, level, "connectivity", 1, ncell_ids + entity_ids, [&](std::size_t i) {
+        return i < ncell_ids ? std::int64_t(mesh.cells[i]) : entity_conn[i - ncell_ids];
+      });
   write_array<std::int64_t>(w, compression, level, "offsets", 1, nc, [&](std::size_t c) {
-    return std::int64_t((c + 1) * std::size_t(nvc));
+    return c < ncells ? std::int64_t((c + 1) * std::size_t(nvc)) : entity_offsets[c - ncells];
   });
   const std::uint8_t type = dim == 2 ? 5 : dim == 3 ? 10 : 2; // triangle, tetra, poly-vertex
-  write_array<std::uint8_t>(w, compression, level, "types", 1, nc,
-                            [&](std::size_t) { return type; });
+  write_array<std::uint8_t>(w, compression, level, "types", 1, nc, [&](std::size_t c) {
+    return c < ncells ? type : entity_types[c - ncells];
+  });
   w.text("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
   w.close();
 }

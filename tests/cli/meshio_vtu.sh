@@ -1,6 +1,6 @@
 # .vtu files written by meshio (what users convert with): ascii, binary
 # (header and data in one base64 text, unlike VTK), zlib, lzma and UInt64
-# headers. bisect info reads the right counts (boundary lines ignored) and
+# headers. bisect info reads the right counts (boundary lines as tagged entities) and
 # bisect refine works on them. Needs /usr/bin/python3 with meshio
 # (python3-meshio); skipped without it.
 source "$(dirname "$0")/lib.bash"

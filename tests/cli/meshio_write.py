@@ -4,7 +4,7 @@
 import numpy as np
 import meshio
 
-# A 2D square of 4 x 4 x 2 triangles, with boundary lines (ignored by bisect),
+# A 2D square of 4 x 4 x 2 triangles, with boundary lines (tagged entities in bisect),
 # and the unit cube of 6 tetrahedra.
 n = 4
 xs = np.linspace(0.0, 1.0, n + 1)

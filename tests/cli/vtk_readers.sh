@@ -1,7 +1,10 @@
 # Our .vtu output as ParaView reads it: VTK's own Python reader
 # (vtkXMLUnstructuredGridReader, python3-vtk9) reads 2D, 3D, 4D and slice
 # outputs in every --compression, with the cell and point counts `bisect
-# info` reports, the right cell types, and every array with its name and type.
+# info` reports, the right cell types, and every array with its name and type;
+# tagged facets and curves (data/ball.msh's boundary, data/box-tagged.msh's
+# groups) as lower-dimensional cells after the volume cells, with their
+# gmsh:physical, and the physical names as field data.
 source "$(dirname "$0")/lib.bash"
 cd "$WORK"
 if ! /usr/bin/python3 -c "import vtk" 2>/dev/null; then
@@ -16,33 +19,51 @@ for c in zlib lz4 none; do
   expect_exit 0 "$BISECT" refine "$ROOT/data/ball.msh" --region "$hemi" -n 2 -o 3d-$c.vtu --compression $c -q
   expect_exit 0 "$BISECT" refine h.vtu --region "$ROOT/data/regions/moving-sphere.json" -n 6 \
     -o 4d-$c.vtu --compression $c -q --slices 0,0.5
+  expect_exit 0 "$BISECT" refine "$ROOT/data/box-tagged.msh" --region "$hemi" -n 2 \
+    -o tagged-$c.vtu --compression $c -q
 done
-for f in 2d-*.vtu 3d-*.vtu 4d-*.vtu 4d-zlib.t0.5.vtu; do
+for f in 2d-*.vtu 3d-*.vtu 4d-*.vtu 4d-zlib.t0.5.vtu tagged-*.vtu; do
   info=$("$BISECT" info "$f")
   cells=$(sed -n 's/^cells: //p' <<<"$info")
   dim=$(sed -n 's/^dimension: //p' <<<"$info")
-  /usr/bin/python3 - "$f" "$cells" "$dim" <<'PY' || fail "$f: VTK's reader disagrees"
+  entities=$(sed -n 's/^tagged entities: \([0-9]*\) .*/\1/p' <<<"$info" | awk '{s += $1} END {print s + 0}')
+  case $f in 2d-* | 3d-* | tagged-*) ((entities > 0)) || fail "$f: no tagged entities" ;; esac
+  /usr/bin/python3 - "$f" "$cells" "$dim" "$entities" <<'PY' || fail "$f: VTK's reader disagrees"
 import sys, vtk
-path, cells, dim = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+path, cells, dim, entities = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4])
 r = vtk.vtkXMLUnstructuredGridReader()
 r.SetFileName(path)
 r.Update()
 if r.GetErrorCode() != 0:
     sys.exit(f"{path}: VTK error code {r.GetErrorCode()}")
 g = r.GetOutput()
-assert g.GetNumberOfCells() == cells, (g.GetNumberOfCells(), cells)
-types = {g.GetCellType(i) for i in range(g.GetNumberOfCells())}
-want = {2: {5}, 3: {10}, 4: {2}}[dim]
-assert types == want, (types, want)
-for i in range(g.GetNumberOfCells()):
+assert g.GetNumberOfCells() == cells + entities, (g.GetNumberOfCells(), cells, entities)
+volume = {2: 5, 3: 10, 4: 2}[dim]
+points = {1: 1, 3: 2, 5: 3, 10: 4}  # vertex, line, triangle, tetra
+types = [g.GetCellType(i) for i in range(g.GetNumberOfCells())]
+assert set(types[:cells]) == {volume}, (set(types[:cells]), volume)
+for i in range(cells):
     assert g.GetCell(i).GetNumberOfPoints() == dim + 1
+for i in range(cells, cells + entities):  # tagged entities: lower-dimensional simplices
+    assert types[i] != volume and types[i] in points, types[i]
+    assert g.GetCell(i).GetNumberOfPoints() == points[types[i]]
+types = set(types)
 cd = g.GetCellData()
 names = {cd.GetArrayName(i): cd.GetArray(i) for i in range(cd.GetNumberOfArrays())}
 if ".t" not in path:  # a refined mesh carries its bisection state as integers
     for n in ("bisect:state", "bisect:marking"):  # one component each
         assert n in names, (n, list(names))
         assert names[n].GetDataTypeAsString() == "int", (n, names[n].GetDataTypeAsString())
-        assert names[n].GetNumberOfTuples() == cells
+        assert names[n].GetNumberOfTuples() == cells + entities
+if entities:
+    phys = names["gmsh:physical"]
+    assert all(phys.GetValue(i) != 0 for i in range(cells, cells + entities))
+if path.startswith("tagged"):
+    assert types == {10, 5, 3}, types  # tetra, triangle (surfaces), line (the curve)
+    fd = g.GetFieldData()
+    fields = {fd.GetArrayName(i) for i in range(fd.GetNumberOfArrays())}
+    assert {"left", "right", "walls", "mid", "edge", "solid"} <= fields, fields
+    assert list(fd.GetArray("walls").GetTuple(0)) + list(fd.GetArray("walls").GetTuple(1)) == [3, 2]
 if dim == 4:
     t = g.GetPointData().GetArray("t")
     assert t is not None and t.GetNumberOfTuples() == g.GetNumberOfPoints()

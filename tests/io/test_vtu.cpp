@@ -234,16 +234,19 @@ TEST_CASE("vtu: written file is zlib-compressed inline binary with 64-bit header
   CHECK(text.find("type=\"Int64\" Name=\"connectivity\"") != std::string::npos);
 }
 
-TEST_CASE("vtu: lower-dimensional cells are ignored and unused points dropped", "[io][3d]") {
+TEST_CASE("vtu: lower-dimensional cells are tagged entities with their cell data; unused points "
+          "are dropped",
+          "[io][3d][entities]") {
   TempDir dir;
   AsciiVtu f;
-  // Point 0 and 6 are used only by a vertex and a line: they are dropped.
+  // Points 0 and 6 are used by no cell: they are dropped. The vertex, line
+  // and triangle are faces of the first tetrahedron.
   f.num_points = 7;
   f.points = "9 9 9  0 0 0  1 0 0  0 1 0  0 0 1  1 1 1  8 8 8";
   f.point_data = ascii_array("Float32", "p", 1, "0 10 20 30 40 50 60") +
                  ascii_array("Int16", "q", 2, "0 0 1 1 2 2 3 3 4 4 5 5 6 6");
   f.num_cells = 5;
-  f.connectivity = "0  0 6  1 2 3  1 2 3 4  5 4 3 2";
+  f.connectivity = "1  1 2  1 2 3  1 2 3 4  5 4 3 2";
   f.offsets = "1 3 6 10 14";
   f.types = "1 3 5 10 10";
   f.cell_data = ascii_array("Int32", "id", 1, "100 101 102 103 104");
@@ -260,6 +263,22 @@ TEST_CASE("vtu: lower-dimensional cells are ignored and unused points dropped", 
   CHECK(m.point_data[1].values == std::vector<double>{1, 1, 2, 2, 3, 3, 4, 4, 5, 5});
   REQUIRE(m.cell_data.size() == 1);
   CHECK(m.cell_data[0].values == std::vector<double>{103, 104});
+  REQUIRE(m.entities.size() == 3);
+  for (int d = 0; d < 3; ++d) {
+    const Entities &e = m.entities[std::size_t(d)];
+    CHECK(e.dim == d);
+    REQUIRE(e.size() == 1);
+    const std::vector<VertexId> first{0, 1, 2}; // the entity's vertices: a prefix
+    CHECK(e.vertices == std::vector<VertexId>(first.begin(), first.begin() + d + 1));
+    REQUIRE(e.data.size() == 1);
+    CHECK(e.data[0].name == "id");
+    CHECK(e.data[0].values == std::vector<double>{100.0 + d});
+  }
+
+  // A line to a point no cell uses is not a face: an error naming the cell.
+  f.connectivity = "1  0 2  1 2 3  1 2 3 4  5 4 3 2";
+  write_text(dir.file("stray.vtu"), f.text());
+  require_clean_read_error(dir.file("stray.vtu"), "cell 1 (line) is not a face of the mesh");
 }
 
 TEST_CASE("vtu: triangles not in one plane z = c are rejected", "[io][2d]") {
