@@ -776,12 +776,12 @@ std::string find_duplicate_vertices(const Mesh &mesh) {
 // reports.
 //
 // Linear time for meshes of bounded grading: a grid row (the grid cells of
-// one (idx[1], .., idx[Dim-1])) is one range of the sorted pairs, found by a
-// hash of the row, and the cells are visited in the sorted order (by their
-// own centroid's grid cell) so that neighbouring cells look up the same rows
-// while they are in cache. (A binary search per row, in the cells' file
-// order, was half of `bisect info`'s time on a 2M-tet file; a dense grid
-// does not fit graded meshes, whose small cells fill a small part of the box.)
+// one (idx[1], .., idx[Dim-1])) is one range of the sorted pairs, found in a
+// small hash table of the rows (a binary search per row was half of `bisect
+// info`'s time on a 2M-tet file; a dense grid does not fit graded meshes,
+// whose small cells fill a small part of the box). Cells are visited in file
+// order, which keeps their vertices' reads local (visiting them in grid
+// order made every cell's first read a cache miss).
 template <int Dim> std::string find_overlap(const Mesh &mesh) {
   constexpr int N = Dim + 1;
   const std::size_t nc = mesh.num_cells();
@@ -850,8 +850,11 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
     std::uint64_t key = ~std::uint64_t(0);
     std::size_t begin = 0, end = 0;
   };
-  std::size_t rows_cap = 16;
-  while (rows_cap < 2 * nc)
+  std::size_t nrows = 0;
+  for (std::size_t i = 0; i < nc; ++i)
+    nrows += i == 0 || grid[i].first >> kBits != grid[i - 1].first >> kBits;
+  std::size_t rows_cap = 16; // at most half full, and small enough to stay in cache
+  while (rows_cap < 2 * nrows)
     rows_cap *= 2;
   std::vector<Row> rows(rows_cap);
   auto slot_of = [&](std::uint64_t row) {
@@ -888,9 +891,8 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
     }
     return true;
   };
-  for (std::size_t at = 0; at < nc; ++at) {
-    const CellId c = grid[at].second;
-    gather<Dim>(mesh, mesh.cell(c), N, pts);
+  for (std::size_t c = 0; c < nc; ++c) {
+    gather<Dim>(mesh, mesh.cell(CellId(c)), N, pts);
     inv_state = 0;
     std::int64_t ilo[Dim], ihi[Dim], idx[Dim];
     double cover = 1, blo[Dim], bhi[Dim];
