@@ -42,9 +42,20 @@ double peak_rss_bytes() {
   return double(u.ru_maxrss) * 1024.0;
 }
 
+LoadProgress load_progress(const std::string &path, bool quiet) {
+  if (quiet)
+    return {};
+  const auto t0 = std::chrono::steady_clock::now();
+  return [path, t0](const char *step, double done) {
+    if (seconds_since(t0) >= 2.0)
+      std::cerr << "bisect: loading " << path << ": " << step << " (" << int(done * 100 + 0.5)
+                << "%)\n";
+  };
+}
+
 // Reads, validates and marks (or restores the marks of) an input mesh.
 Mesh load_for_refinement(const std::string &path, std::optional<Marking> requested, bool quiet) {
-  Mesh mesh = load_mesh(path);
+  Mesh mesh = load_mesh(path, load_progress(path, quiet));
   if (mesh.marked()) {
     if (requested && *requested != mesh.marking && !quiet)
       std::cerr << "bisect: " << path << " carries bisection state with --marking "

@@ -48,6 +48,11 @@ void add_common_flags(CLI::App *cmd, CommonFlags &flags);
 double seconds_since(std::chrono::steady_clock::time_point t0);
 double peak_rss_bytes();
 
+// Progress lines for loading `path` on stderr ("bisect: loading big.vtu:
+// matching facets (40%)"), printed as each step starts once the load has
+// taken 2 s; none when `quiet`.
+LoadProgress load_progress(const std::string &path, bool quiet);
+
 // Reads, validates and marks (or restores the marks of) an input mesh; says
 // so when a file's state overrides --marking.
 Mesh load_for_refinement(const std::string &path, std::optional<Marking> requested, bool quiet);

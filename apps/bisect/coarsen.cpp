@@ -67,7 +67,7 @@ int run_coarsen(const CoarsenArgs &a) {
   OutputSet outputs({a.input, a.region}, a.force);
   const int h_mesh = outputs.add(out);
 
-  Mesh mesh = load_mesh(a.input);
+  Mesh mesh = load_mesh(a.input, load_progress(a.input, a.flags.quiet));
   check_output_format(out, mesh.dim, a.format);
   const std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
   const std::vector<char> marks = marked_cells(mesh, a);

@@ -58,7 +58,7 @@ int run_extrude(const ExtrudeArgs &a) {
     check_output_format(a.output, 4);
   }
   Mesh mesh = read_mesh(a.input);
-  prepare_input(mesh, a.input);
+  prepare_input(mesh, a.input, load_progress(a.input, a.flags.quiet));
   if (mesh.dim != 3)
     throw InputError(a.input, "extrude needs a 3D tetrahedral mesh, this one is " +
                                   std::to_string(mesh.dim) + "D");

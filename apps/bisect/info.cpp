@@ -32,7 +32,7 @@ struct InfoArgs {
 
 int run_info(const InfoArgs &a) {
   const std::string &path = a.input;
-  Mesh mesh = load_mesh(path);
+  Mesh mesh = load_mesh(path, load_progress(path, a.flags.quiet));
   const bool has_state = mesh.marked();
   const Invariants inv = measure_invariants(mesh);
   const QualitySummary q = quality_summary(mesh);

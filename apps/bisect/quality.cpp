@@ -19,7 +19,7 @@ struct QualityArgs {
 
 int run_quality(const QualityArgs &a) {
   Mesh mesh = read_mesh(a.input);
-  prepare_input(mesh, a.input);
+  prepare_input(mesh, a.input, load_progress(a.input, a.flags.quiet));
   const int bins = a.bins;
   std::vector<std::size_t> hist(std::size_t(bins), 0);
   double pts[5 * 4];

@@ -91,10 +91,11 @@ int run_refine(const RefineArgs &a) {
 
   StageSeconds stages;
   auto t0 = std::chrono::steady_clock::now();
+  const LoadProgress progress = load_progress(a.input, quiet);
   Mesh mesh = read_mesh(a.input);
   stages.read = seconds_since(t0);
   t0 = std::chrono::steady_clock::now();
-  prepare_input(mesh, a.input);
+  prepare_input(mesh, a.input, progress);
   if (decode_state(mesh, a.input)) {
     if (marking && *marking != mesh.marking && !quiet)
       std::cerr << "bisect: " << a.input << " carries bisection state with --marking "

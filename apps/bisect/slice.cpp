@@ -22,7 +22,7 @@ int run_slice(const SliceArgs &a) {
   OutputSet outputs({a.input}, a.force);
   const int h = outputs.add(a.output);
   Mesh mesh = read_mesh(a.input);
-  prepare_input(mesh, a.input);
+  prepare_input(mesh, a.input, load_progress(a.input, a.flags.quiet));
   if (mesh.dim < 3)
     throw InputError(a.input, "slice needs a 3D or 4D mesh, this one is 2D");
   const int axis = a.axis == "t" ? mesh.dim - 1 : int(std::string("xyz").find(a.axis[0]));

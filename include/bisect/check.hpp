@@ -65,13 +65,20 @@ void for_each_interior_facet(const Mesh &mesh,
 // for vertices and facet centroids on boundary facets runs as well.
 CheckResult check_refined(const Mesh &mesh, const Invariants &original);
 
+// Progress of a long load or validation: called as each step starts, with
+// the step ("reading", "matching facets", ...) and an estimate of the
+// fraction of the whole load done (0 to 1, from the steps' typical costs).
+using LoadProgress = std::function<void(const char *step, double done)>;
+
 // Validates a freshly read mesh and orients every cell positively. Throws
 // InputError naming `path`: NaN/Inf coordinates, ids out of range, repeated
 // vertex in a cell, zero-volume cells, a facet shared by three or more cells,
 // a hanging node (a vertex lying on a boundary facet it does not belong to,
 // found with a grid over the boundary vertices), a face split differently on
 // its two sides (a boundary facet's centroid on another boundary facet).
-void prepare_input(Mesh &mesh, const std::string &path);
+// `progress`, when set, hears of each step (done from 0.3 to 0.95: the read
+// before it is about 0.3 of a load).
+void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &progress = {});
 
 // The index of the first entity of `block` (mesh.hpp, Entities) that is not a
 // face of some cell of `mesh` (ids out of range included), or

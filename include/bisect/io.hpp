@@ -2,6 +2,7 @@
 // `.vtu` (VTK XML unstructured grid) and `.msh` (Gmsh 2.2 and 4.1).
 #pragma once
 
+#include "bisect/check.hpp"
 #include "bisect/mesh.hpp"
 
 #include <string>
@@ -44,7 +45,8 @@ void check_output_format(const std::string &name, int dim, const std::string &fo
 // InputError naming the file), every cell positively oriented, and the
 // bisection state restored when the file carries one (then mesh.marked();
 // otherwise the mesh is unmarked: see ensure_marked in mark.hpp).
-Mesh load_mesh(const std::string &path);
+// `progress`, when set, hears of each step (see LoadProgress in check.hpp).
+Mesh load_mesh(const std::string &path, const LoadProgress &progress = {});
 
 // Writes `mesh` with its bisection state (the bisect:* cell arrays, so that
 // refining the file continues the same sequence) through a temporary file

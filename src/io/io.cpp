@@ -214,9 +214,13 @@ void check_output_format(const std::string &name, int dim, const std::string &fo
     throw InputError(name, "a .msh file cannot hold a 4D mesh; write .vtu");
 }
 
-Mesh load_mesh(const std::string &path) {
+Mesh load_mesh(const std::string &path, const LoadProgress &progress) {
+  if (progress)
+    progress("reading", 0.0);
   Mesh mesh = read_mesh(path);
-  prepare_input(mesh, path);
+  prepare_input(mesh, path, progress);
+  if (progress)
+    progress("restoring the bisection state", 0.95);
   decode_state(mesh, path);
   return mesh;
 }
