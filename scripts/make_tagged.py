@@ -70,6 +70,13 @@ def groups(cells, ids, n, dim):
     return out
 
 
+def write_names(f, names):
+    f.write("$PhysicalNames\n%d\n" % len(names))
+    for d, t, name in names:
+        f.write('%d %d "%s"\n' % (d, t, name))
+    f.write("$EndPhysicalNames\n")
+
+
 def write_box(path, n):
     ids = grid(n, 3)
     cells = kuhn_cells(n, 3, ids)
@@ -78,10 +85,7 @@ def write_box(path, n):
              (3, 10, "solid")]
     with open(path, "w") as f:
         f.write("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n")
-        f.write("$PhysicalNames\n%d\n" % len(names))
-        for d, t, name in names:
-            f.write('%d %d "%s"\n' % (d, t, name))
-        f.write("$EndPhysicalNames\n")
+        write_names(f, names)
         f.write("$Entities\n0 1 4 1\n")
         f.write("1 0 0 0 1 0 0 1 5 0\n")  # curve 1: y = z = 0, physical 5
         for d, phys, tag, _ in tagged:
@@ -115,10 +119,8 @@ def write_square(path, n):
              (2, 10, "solid")]
     with open(path, "w") as f:
         f.write("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n")
-        f.write("$PhysicalNames\n%d\n" % len(names))
-        for d, t, name in names:
-            f.write('%d %d "%s"\n' % (d, t, name))
-        f.write("$EndPhysicalNames\n$Nodes\n%d\n" % len(ids))
+        write_names(f, names)
+        f.write("$Nodes\n%d\n" % len(ids))
         for ijk, v in ids.items():
             f.write("%d %.17g %.17g 0\n" % (v, ijk[0] / n, ijk[1] / n))
         f.write("$EndNodes\n")

@@ -101,6 +101,16 @@ void check_extension(const std::string &out) {
 }
 
 // Writes `mesh` with its bisection state into output `h` of `outputs`.
+std::string output_name(const std::string &name, const std::string &format, bool json) {
+  if (name != "-")
+    return name;
+  if (format.empty())
+    throw UsageError("-o -: give the format with --format vtu or --format msh");
+  if (json)
+    throw UsageError("--json and -o - both write to standard output; choose one");
+  return "/dev/stdout";
+}
+
 void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions &options) {
   encode_state(mesh);
   write_mesh_file(outputs.file(h), outputs.name(h), mesh, options);

@@ -66,6 +66,10 @@ void check_extension(const std::string &out);
 // Writes `mesh` with its bisection state into output `h` of `outputs`.
 void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions &options = {});
 
+// The output mesh's file: `name`, or /dev/stdout for "-" (which needs
+// `format`, and no --json: both would go to standard output).
+std::string output_name(const std::string &name, const std::string &format, bool json);
+
 // "<output stem>.<axis><value>.vtu" beside the output.
 std::string slice_path(const std::string &output, const char *axis, double value);
 

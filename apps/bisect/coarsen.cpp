@@ -50,18 +50,11 @@ int run_coarsen(const CoarsenArgs &a) {
     throw UsageError("--indicator needs --below X (cells whose value is below X are coarsened)");
   if (a.indicator.empty() && !std::isnan(a.below))
     throw UsageError("--below needs --indicator NAME");
-  std::string out = a.output.empty() ? (a.input == "-" ? std::string("stdin")
-                                                       : fs::path(a.input).stem().string()) +
-                                           ".coarsened.vtu"
-                                     : a.output;
+  const std::string stem =
+      a.input == "-" ? std::string("stdin") : fs::path(a.input).stem().string();
   // -o -: the mesh goes to standard output.
-  if (out == "-") {
-    if (a.format.empty())
-      throw UsageError("-o -: give the format with --format vtu or --format msh");
-    if (a.flags.json)
-      throw UsageError("--json and -o - both write to standard output; choose one");
-    out = "/dev/stdout";
-  }
+  const std::string out =
+      output_name(a.output.empty() ? stem + ".coarsened.vtu" : a.output, a.format, a.flags.json);
   if (a.format.empty())
     check_extension(out);
   OutputSet outputs({a.input, a.region}, a.force);

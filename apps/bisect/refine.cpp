@@ -66,15 +66,9 @@ int run_refine(const RefineArgs &a) {
   std::optional<Marking> marking;
   if (!a.marking.empty())
     marking = parse_marking(a.marking);
-  std::string out = a.output.empty() ? default_output(a.input) : a.output;
   // -o -: the mesh goes to standard output (then no CSV unless asked for).
-  if (out == "-") {
-    if (a.format.empty())
-      throw UsageError("-o -: give the format with --format vtu or --format msh");
-    if (a.flags.json)
-      throw UsageError("--json and -o - both write to standard output; choose one");
-    out = "/dev/stdout";
-  }
+  const std::string out =
+      output_name(a.output.empty() ? default_output(a.input) : a.output, a.format, a.flags.json);
   const std::string csv = !a.csv.empty() ? a.csv : a.output == "-" ? "none" : default_csv(out);
   if (a.format.empty())
     check_extension(out);
