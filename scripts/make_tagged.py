@@ -77,12 +77,18 @@ def write_names(f, names):
     f.write("$EndPhysicalNames\n")
 
 
+def tagged_grid(n, d):
+    """The Kuhn grid of the unit d-cube, its tagged groups and their names."""
+    ids = grid(n, d)
+    cells = kuhn_cells(n, d, ids)
+    tagged = groups(cells, ids, n, d)
+    names = [(d - 1, 1, "left"), (d - 1, 2, "right"), (d - 1, 3, "walls"), (d - 1, 4, "mid"),
+             (d - 2, 5, "edge"), (d, 10, "solid")]
+    return ids, cells, tagged, names
+
+
 def write_box(path, n):
-    ids = grid(n, 3)
-    cells = kuhn_cells(n, 3, ids)
-    tagged = groups(cells, ids, n, 3)
-    names = [(2, 1, "left"), (2, 2, "right"), (2, 3, "walls"), (2, 4, "mid"), (1, 5, "edge"),
-             (3, 10, "solid")]
+    ids, cells, tagged, names = tagged_grid(n, 3)
     with open(path, "w") as f:
         f.write("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n")
         write_names(f, names)
@@ -112,11 +118,7 @@ def write_box(path, n):
 
 
 def write_square(path, n):
-    ids = grid(n, 2)
-    cells = kuhn_cells(n, 2, ids)
-    tagged = groups(cells, ids, n, 2)
-    names = [(1, 1, "left"), (1, 2, "right"), (1, 3, "walls"), (1, 4, "mid"), (0, 5, "edge"),
-             (2, 10, "solid")]
+    ids, cells, tagged, names = tagged_grid(n, 2)
     with open(path, "w") as f:
         f.write("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n")
         write_names(f, names)

@@ -111,6 +111,13 @@ std::string output_name(const std::string &name, const std::string &format, bool
   return "/dev/stdout";
 }
 
+void add_format_option(CLI::App *cmd, std::string &format) {
+  cmd->add_option("--format", format,
+                  "Output format when the output's name has no .vtu/.msh extension "
+                  "(-o - for standard output, -o /dev/stdout, a FIFO)")
+      ->check(CLI::IsMember({"vtu", "msh"}));
+}
+
 void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions &options) {
   encode_state(mesh);
   write_mesh_file(outputs.file(h), outputs.name(h), mesh, options);

@@ -69,6 +69,8 @@ void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions
 // The output mesh's file: `name`, or /dev/stdout for "-" (which needs
 // `format`, and no --json: both would go to standard output).
 std::string output_name(const std::string &name, const std::string &format, bool json);
+// --format vtu|msh: the output's format when its name has no extension.
+void add_format_option(CLI::App *cmd, std::string &format);
 
 // "<output stem>.<axis><value>.vtu" beside the output.
 std::string slice_path(const std::string &output, const char *axis, double value);

@@ -176,10 +176,7 @@ Command add_coarsen(CLI::App &app) {
   cmd->add_option("--output,-o", a->output,
                   "Output mesh (.vtu or .msh; - standard output, with --format); default "
                   "<input stem>.coarsened.vtu here");
-  cmd->add_option("--format", a->format,
-                  "Output format when the output's name has no .vtu/.msh extension "
-                  "(e.g. -o - --format vtu)")
-      ->check(CLI::IsMember({"vtu", "msh"}));
+  add_format_option(cmd, a->format);
   cmd->add_flag("--force,-f", a->force, "Overwrite existing output files (never the input)");
   cmd->add_flag("--check", a->check,
                 "Full conformity check (and Euler characteristic) instead of the cheap one");

@@ -306,10 +306,7 @@ Command add_refine(CLI::App &app) {
   cmd->add_option("--output,-o", a->output,
                   "Output mesh (.vtu or .msh); default <input stem>.refined.vtu here; "
                   "- for standard output (with --format)");
-  cmd->add_option("--format", a->format,
-                  "Output format when the output's name has no .vtu/.msh extension "
-                  "(e.g. -o /dev/stdout --format vtu)")
-      ->check(CLI::IsMember({"vtu", "msh"}));
+  add_format_option(cmd, a->format);
   cmd->add_option("--compression", a->compression,
                   ".vtu output: zlib (default), lz4 (faster, larger) or none; ParaView and "
                   "VTK read all three")
