@@ -327,15 +327,16 @@ bool fits_int32(const std::vector<double> &values) {
   return true;
 }
 
-// Writes `a` in its type (ValueType); Unknown: Int32 when every value is a
-// 32-bit integer and `guess_int` (cell arrays), else Float64.
-void write_typed(Writer &w, VtuCompression compression, int level, const DataArray &a,
-                 bool guess_int) {
+// Writes `count` values get(i) as an array of type `t`; Unknown: Int32 when
+// `int32` (the caller found every value a 32-bit integer), else Float64.
+template <class Get>
+void write_values(Writer &w, VtuCompression compression, int level, const std::string &name,
+                  int components, std::size_t count, ValueType t, bool int32, Get get) {
   auto put = [&]<class T>(T) {
-    write_array<T>(w, compression, level, a.name, a.components, a.values.size(),
-                   [&](std::size_t i) { return static_cast<T>(a.values[i]); });
+    write_array<T>(w, compression, level, name, components, count,
+                   [&](std::size_t i) { return static_cast<T>(get(i)); });
   };
-  switch (a.type) {
+  switch (t) {
   case ValueType::Float32:
     return put(float{});
   case ValueType::Float64:
@@ -359,9 +360,18 @@ void write_typed(Writer &w, VtuCompression compression, int level, const DataArr
   case ValueType::Unknown:
     break;
   }
-  if (guess_int && fits_int32(a.values))
+  if (int32)
     return put(std::int32_t{});
   put(double{});
+}
+
+// Writes `a` in its type (ValueType); Unknown: Int32 when every value is a
+// 32-bit integer and `guess_int` (cell arrays), else Float64.
+void write_typed(Writer &w, VtuCompression compression, int level, const DataArray &a,
+                 bool guess_int) {
+  write_values(w, compression, level, a.name, a.components, a.values.size(), a.type,
+               guess_int && a.type == ValueType::Unknown && fits_int32(a.values),
+               [&](std::size_t i) { return a.values[i]; });
 }
 
 // The cell arrays of a mesh with tagged entities, which follow the volume
@@ -369,8 +379,12 @@ void write_typed(Writer &w, VtuCompression compression, int level, const DataArr
 // of some entity block, with a row per cell and per entity. An entity's own
 // value where its block has the array (same components), else 0 for an
 // integer array (bisect:state and the other state arrays included) and NaN
-// for a float one; cells lacking an entity array get the same padding.
-std::vector<DataArray> cell_arrays_with_entities(const Mesh &mesh) {
+// for a float one; cells lacking an entity array get the same padding. Read
+// in place from the cells' and the blocks' arrays, one array at a time (a
+// padded copy of every cell array would add 8 bytes per cell and array to
+// the write's memory peak).
+void write_cell_arrays_with_entities(Writer &w, VtuCompression compression, int level,
+                                     const Mesh &mesh) {
   std::vector<const DataArray *> firsts; // one per name, cells' arrays first
   auto note = [&](const DataArray &a) {
     for (const DataArray *f : firsts)
@@ -389,27 +403,35 @@ std::vector<DataArray> cell_arrays_with_entities(const Mesh &mesh) {
         return &a;
     return static_cast<const DataArray *>(nullptr);
   };
-  std::vector<DataArray> out;
+  struct Segment {
+    const DataArray *own;     // nullptr: padding
+    std::size_t first, count; // values
+  };
   for (const DataArray *f : firsts) {
-    DataArray a{f->name, f->components, {}, f->type};
     const bool integer =
         is_integer_type(f->type) || (f->type == ValueType::Unknown && fits_int32(f->values));
     const double pad = integer ? 0.0 : std::numeric_limits<double>::quiet_NaN();
-    const std::size_t k = std::size_t(a.components);
-    auto append = [&](const DataArray *own, std::size_t rows) {
-      if (own)
-        a.values.insert(a.values.end(), own->values.begin(), own->values.end());
-      else
-        a.values.insert(a.values.end(), rows * k, pad);
+    const std::size_t k = std::size_t(f->components);
+    std::vector<Segment> segments;
+    std::size_t total = 0;
+    auto add = [&](const DataArray *own, std::size_t rows) {
+      segments.push_back({own, total, rows * k});
+      total += rows * k;
     };
-    append(same_array(mesh.cell_data, *f), mesh.num_cells());
+    add(same_array(mesh.cell_data, *f), mesh.num_cells());
     for (const Entities &b : mesh.entities)
-      append(same_array(b.data, *f), b.size());
-    if (a.type == ValueType::Unknown && !integer)
-      a.type = ValueType::Float64; // NaN padding must not be guessed as Int32
-    out.push_back(std::move(a));
+      add(same_array(b.data, *f), b.size());
+    // NaN padding must not be guessed as Int32.
+    const ValueType type = f->type == ValueType::Unknown && !integer ? ValueType::Float64 : f->type;
+    std::size_t at = 0; // the segment of the last value (values come in order)
+    write_values(w, compression, level, f->name, f->components, total, type,
+                 type == ValueType::Unknown, [&](std::size_t i) {
+                   while (i >= segments[at].first + segments[at].count)
+                     ++at;
+                   const Segment &s = segments[at];
+                   return s.own ? s.own->values[i - s.first] : pad;
+                 });
   }
-  return out;
 }
 
 // Physical names as field data in meshio's convention: an Int32 array named
@@ -471,8 +493,7 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
     for (const DataArray &a : mesh.cell_data)
       write_typed(w, compression, level, a, true);
   else
-    for (const DataArray &a : cell_arrays_with_entities(mesh))
-      write_typed(w, compression, level, a, true);
+    write_cell_arrays_with_entities(w, compression, level, mesh);
   w.text("      </CellData>\n      <Points>\n");
   write_array<double>(w, compression, level, "Points", 3, 3 * nv, [&](std::size_t i) {
     const std::size_t v = i / 3, k = i % 3;
