@@ -925,8 +925,17 @@ void read_physical_names(Source &src, MshFile &f) {
     const long long tag = src.integer("a physical tag");
     src.skip_space();
     std::string_view name = src.line("a physical name");
+    while (!name.empty() && (name.back() == '\r' || name.back() == ' ' || name.back() == '\t'))
+      name.remove_suffix(1);
     if (name.size() >= 2 && name.front() == '"' && name.back() == '"')
       name = name.substr(1, name.size() - 2);
+    // A name is written back between quotes on one line (and into .vtu
+    // field data): a quote or a control character in it is a broken file.
+    if (std::find_if(name.begin(), name.end(), [](char c) {
+          return c == '"' || static_cast<unsigned char>(c) < 0x20;
+        }) != name.end())
+      src.fail(at,
+               "physical name " + quoted(name) + " contains a double quote or a control character");
     f.physical_names.push_back({int(dim), int(tag), std::string(name)});
   }
   src.expect_end("PhysicalNames");
