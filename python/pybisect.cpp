@@ -737,9 +737,11 @@ PYBIND11_MODULE(pybisect, m) {
           "dict name -> writable float64 view (m,) or (m, k)")
       .def("coarsen", &coarsen, py::arg("marked") = py::none(), py::arg("passes") = 1,
            py::arg("sum") = std::vector<std::string>{},
-           "Undo bisections along the bisection tree: a pass removes every created vertex whose "
-           "whole star is marked (marked: boolean mask or cell ids; None: every cell) and pairs "
-           "up into siblings; passes=0 runs until a pass removes nothing. Cell arrays named in "
+           "Undo bisections along the bisection tree: a created vertex goes when its whole star "
+           "is marked (marked: boolean mask or cell ids; None: every cell) and pairs up into "
+           "siblings; a pass undoes the newest refinement iteration around each vertex, so n "
+           "refine calls are undone by n passes; passes=0 runs until a pass removes nothing. "
+           "Cell arrays named in "
            "`sum` are summed, others take the children's common value or their mean.")
       .def("refine", &refine, py::arg("marked") = py::none(), py::arg("region") = py::none(),
            py::arg("depth") = 1, py::arg("marking") = "index", py::arg("max_cells") = 0,

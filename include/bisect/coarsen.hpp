@@ -1,5 +1,5 @@
 // Coarsening along the bisection tree (ALGORITHMS.md §10): the inverse of
-// refine(), one level of the tree per pass.
+// refine(): each pass undoes the newest refinement iteration around each vertex.
 #pragma once
 
 #include "bisect/mesh.hpp"
