@@ -25,6 +25,12 @@ const char *const kExitCodesHelp =
 void add_common_flags(CLI::App *cmd, CommonFlags &flags) {
   cmd->add_flag("--quiet,-q", flags.quiet, "No progress or \"wrote\" lines on stderr");
   cmd->add_flag("--json", flags.json, "Print a JSON summary on stdout");
+  cmd->add_option_function<int>(
+         "--threads", [](int n) { set_threads(n); },
+         "Threads for the parallel steps (default 0: one per core); the output is the same for "
+         "every count")
+      ->check(CLI::Range(0, 4096))
+      ->type_name("N");
 }
 
 void print_json(const nlohmann::json &j) {

@@ -27,5 +27,6 @@
 #include "bisect/refine.hpp"    // bisection and refine to conformity
 #include "bisect/region.hpp"    // region specs and selection
 #include "bisect/slice.hpp"     // sections of 3D and 4D meshes (tools)
-#include "bisect/state.hpp"
-#include "bisect/text.hpp" // one_line, with_commas     // the bisection state in files
+#include "bisect/state.hpp"     // the bisection state in files
+#include "bisect/text.hpp"      // one_line, with_commas
+#include "bisect/threads.hpp"   // how many threads the parallel loops use

@@ -14,16 +14,19 @@
 #include "core/geometry.hpp"
 
 #include "bisect/measure.hpp"
+#include "bisect/threads.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <new>
 #include <stdexcept>
 #include <string>
+#include <sys/mman.h>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -91,6 +94,23 @@ template <class T> struct UninitialisedAllocator : std::allocator<T> {
   template <class U> struct rebind { using other = UninitialisedAllocator<U>; };
   UninitialisedAllocator() = default;
   template <class U> UninitialisedAllocator(const UninitialisedAllocator<U> &) noexcept {}
+  T *allocate(std::size_t n) {
+    constexpr std::size_t kHuge = std::size_t(2) << 20;
+    const std::size_t bytes = n * sizeof(T);
+    if (bytes < 4 * kHuge)
+      return std::allocator<T>::allocate(n);
+    void *p = std::aligned_alloc(kHuge, (bytes + kHuge - 1) / kHuge * kHuge);
+    if (!p)
+      throw std::bad_alloc();
+    madvise(p, (bytes + kHuge - 1) / kHuge * kHuge, MADV_HUGEPAGE);
+    return static_cast<T *>(p);
+  }
+  void deallocate(T *p, std::size_t n) {
+    constexpr std::size_t kHuge = std::size_t(2) << 20;
+    if (n * sizeof(T) < 4 * kHuge)
+      return std::allocator<T>::deallocate(p, n);
+    std::free(p);
+  }
   template <class U> void construct(U *p) noexcept { ::new (static_cast<void *>(p)) U; }
   template <class U, class... Args> void construct(U *p, Args &&...args) {
     ::new (static_cast<void *>(p)) U(std::forward<Args>(args)...);
@@ -106,12 +126,18 @@ using UIntFor =
     std::conditional_t<Bits <= 32, std::uint32_t,
                        std::conditional_t<Bits <= 64, std::uint64_t, unsigned __int128>>;
 
-// The walk in pieces: the constructor counts the buckets; chunk [v0, v1)
-// fills `buffer` from one scan of the cells and visits its sub-simplices in
-// key order. Chunks are independent: several threads could walk different
-// chunks, each with its own buffer and visitor. (Tried for the final check
-// with 2 threads of half the buffer each: slower on this 2-core machine, as
-// every chunk rescans all cells.)
+// The walk in pieces. The sub-simplices are grouped by their smallest id v
+// in two levels: coarse buckets of 2^shift consecutive ids (at most
+// kStreams of them, so that appending to all of them at once stays in the
+// cache), then, one coarse bucket at a time and within the cache, fine
+// buckets of one id each. A single scatter into one bucket per vertex put
+// each write at a random place in a buffer far larger than the cache, and a
+// cache miss per sub-simplex was most of the final check's time.
+//
+// The constructor counts the coarse buckets; chunk [b0, b1) of coarse
+// buckets fills `buffer` from one scan of the cells and visits its
+// sub-simplices in key order. Chunks are independent: several threads could
+// walk different chunks, each with its own buffer and visitor.
 template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
   static_assert(K >= 2 && K <= 4);
   static constexpr auto subsets = subsimplices<Dim + 1, K>();
@@ -119,11 +145,16 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
   static_assert(!SideOnly || (WithRefs && K == Dim));
   static constexpr int kRefBits = SideOnly ? 1 : WithRefs ? 32 : 0;
   static constexpr int kIdBits = SideOnly ? 31 : 32;
+  static constexpr std::size_t kStreams = 1024;
+  static constexpr std::size_t kBlock = 16;               // coarse buckets per visitor (see chunk)
+  static constexpr std::size_t kCellsPerThread = 1 << 16; // fewer cells: fewer threads
   using Packed = UIntFor<kIdBits *(K - 1) + kRefBits>;
+  using Buffer = std::vector<Packed, UninitialisedAllocator<Packed>>;
 
   const Mesh &mesh;
   const std::vector<std::int8_t> *signs;
-  std::vector<std::size_t> start; // start[v] .. start[v+1]: bucket of smallest id v
+  int shift = 0;                  // a coarse bucket holds 2^shift consecutive smallest ids
+  std::vector<std::size_t> start; // start[b] .. start[b+1]: coarse bucket b
 
   static VertexId min_of(const VertexId *cell, int m) {
     VertexId v = cell[subsets[m][0]];
@@ -132,86 +163,177 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
     return v;
   }
 
+  // The cells are scanned by `parts` threads, part t the cells
+  // [part_begin(t), part_begin(t + 1)); counts[t * coarse + b] is the number
+  // of sub-simplices part t puts in coarse bucket b. Where an entry lands
+  // within its bucket depends on the parts, but each fine bucket is sorted
+  // in full (the packed integer is the whole key), so nothing visited does.
+  int parts = 1;
+  std::vector<std::size_t> counts;
+
+  std::size_t part_begin(int t) const { return mesh.num_cells() * std::size_t(t) / parts; }
+
   Walk(const Mesh &mesh_, const std::vector<std::int8_t> *signs_) : mesh(mesh_), signs(signs_) {
     const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
     if (nc * M >= std::size_t(kSideBit))
       throw ResourceError("", "mesh too large for the 32-bit sub-simplex references of the checks");
     if (SideOnly && nv >= std::size_t(kSideBit))
       throw ResourceError("", "mesh too large for the 31-bit vertex ids of the final check");
-    start.assign(nv + 1, 0);
-    for (std::size_t c = 0; c < nc; ++c)
-      for (int m = 0; m < M; ++m)
-        ++start[min_of(mesh.cell(CellId(c)), m) + 1];
-    for (std::size_t v = 1; v <= nv; ++v)
-      start[v] += start[v - 1];
+    while (shift < 16 && (nv >> shift) > kStreams)
+      ++shift;
+    const std::size_t coarse = nv ? ((nv - 1) >> shift) + 1 : 0;
+    parts = int(std::clamp<std::size_t>(nc / kCellsPerThread, 1, std::size_t(threads())));
+    counts.assign(std::size_t(parts) * coarse, 0);
+#pragma omp parallel for num_threads(parts) schedule(static, 1)
+    for (int t = 0; t < parts; ++t) {
+      std::size_t *mine = counts.data() + std::size_t(t) * coarse;
+      for (std::size_t c = part_begin(t); c < part_begin(t + 1); ++c)
+        for (int m = 0; m < M; ++m)
+          ++mine[min_of(mesh.cell(CellId(c)), m) >> shift];
+    }
+    start.assign(coarse + 1, 0);
+    for (int t = 0; t < parts; ++t)
+      for (std::size_t b = 0; b < coarse; ++b)
+        start[b + 1] += counts[std::size_t(t) * coarse + b];
+    for (std::size_t b = 1; b <= coarse; ++b)
+      start[b] += start[b - 1];
   }
 
-  // The chunks [v0, v1) of at most `cap` entries each (at least one bucket).
+  // The chunks [b0, b1) of coarse buckets of at most `cap` entries each (at
+  // least one bucket).
   std::vector<std::pair<std::size_t, std::size_t>> chunks(std::size_t cap) const {
     std::vector<std::pair<std::size_t, std::size_t>> out;
-    const std::size_t nv = mesh.num_vertices();
-    for (std::size_t v0 = 0; v0 < nv;) {
-      std::size_t v1 = v0 + 1;
-      while (v1 < nv && start[v1 + 1] - start[v0] <= cap)
-        ++v1;
-      out.emplace_back(v0, v1);
-      v0 = v1;
+    const std::size_t coarse = start.size() - 1;
+    for (std::size_t b0 = 0; b0 < coarse;) {
+      std::size_t b1 = b0 + 1;
+      while (b1 < coarse && start[b1 + 1] - start[b0] <= cap)
+        ++b1;
+      out.emplace_back(b0, b1);
+      b0 = b1;
     }
     return out;
   }
 
-  template <class Visit>
-  void chunk(std::size_t v0, std::size_t v1,
-             std::vector<Packed, UninitialisedAllocator<Packed>> &buffer, Visit &&visit) const {
-    const std::size_t nc = mesh.num_cells();
-    std::vector<std::size_t> cursor(start.begin() + std::ptrdiff_t(v0),
-                                    start.begin() + std::ptrdiff_t(v1));
-    std::vector<std::uint32_t> group;
+  // One sub-simplex, packed: the K-1 ids after the smallest, then the
+  // reference (or the side bit), high to low bits.
+  Packed pack(const VertexId *cell, std::size_t c, int m, std::array<VertexId, K> &key) const {
+    for (int i = 0; i < K; ++i)
+      key[i] = cell[subsets[m][i]];
+    sort_small<K>(key);
+    unsigned __int128 p = 0;
+    for (int j = 1; j < K; ++j)
+      p = (p << kIdBits) | key[j];
+    if constexpr (SideOnly) {
+      p = (p << 1) | unsigned(signs && facet_side<Dim>(cell, m, (*signs)[c]) > 0);
+    } else if constexpr (WithRefs) {
+      std::uint32_t ref = std::uint32_t(c * M + m);
+      if constexpr (K == Dim)
+        if (signs && facet_side<Dim>(cell, m, (*signs)[c]) > 0)
+          ref |= kSideBit;
+      p = (p << 32) | ref;
+    }
+    return Packed(p);
+  }
+
+  // Sorts [first, last), the sub-simplices of smallest id v, and visits them.
+  template <class It, class Visit>
+  static void visit_bucket(VertexId v, It first, It last, std::vector<std::uint32_t> &group,
+                           Visit &visit) {
+    std::sort(first, last);
     std::array<VertexId, K> key;
-    buffer.resize(start[v1] - start[v0]);
-    for (std::size_t c = 0; c < nc; ++c) {
-      const VertexId *cell = mesh.cell(CellId(c));
-      for (int m = 0; m < M; ++m) {
-        const VertexId low = min_of(cell, m);
-        if (low < v0 || low >= v1)
-          continue;
-        for (int i = 0; i < K; ++i)
-          key[i] = cell[subsets[m][i]];
-        sort_small<K>(key);
-        unsigned __int128 p = 0;
-        for (int j = 1; j < K; ++j)
-          p = (p << kIdBits) | key[j];
-        if constexpr (SideOnly) {
-          p = (p << 1) | unsigned(signs && facet_side<Dim>(cell, m, (*signs)[c]) > 0);
-        } else if constexpr (WithRefs) {
-          std::uint32_t ref = std::uint32_t(c * M + m);
-          if constexpr (K == Dim)
-            if (signs && facet_side<Dim>(cell, m, (*signs)[c]) > 0)
-              ref |= kSideBit;
-          p = (p << 32) | ref;
+    key[0] = v;
+    for (auto i = first; i != last;) {
+      const Packed rest = *i >> kRefBits;
+      group.clear();
+      auto j = i;
+      for (; j != last && (*j >> kRefBits) == rest; ++j)
+        if constexpr (SideOnly)
+          group.push_back(std::uint32_t(*j & 1u) ? kSideBit : 0u);
+        else if constexpr (WithRefs)
+          group.push_back(std::uint32_t(*j));
+      for (int t = K - 1; t >= 1; --t)
+        key[t] =
+            VertexId((rest >> (kIdBits * (K - 1 - t))) & Packed(0xFFFFFFFFu >> (32 - kIdBits)));
+      visit(std::as_const(key), WithRefs ? group.data() : nullptr, int(j - i));
+      i = j;
+    }
+  }
+
+  // Fills the chunk [b0, b1) of coarse buckets and visits it. visitor(k)
+  // gives the visitor of block k, the coarse buckets [k * kBlock,
+  // (k + 1) * kBlock); with Parallel the blocks are visited by several
+  // threads at once (each block's visitor by one thread, in key order),
+  // otherwise in order by this one.
+  template <bool Parallel, class VisitorOf>
+  void chunk(std::size_t b0, std::size_t b1, Buffer &buffer, VisitorOf &&visitor) const {
+    const std::size_t coarse = start.size() - 1;
+    const std::size_t base = start[b0];
+    const VertexId lo_v = VertexId(b0 << shift);
+    const VertexId hi_v = VertexId(std::min(mesh.num_vertices(), b1 << shift));
+    const std::size_t mask = (std::size_t(1) << shift) - 1;
+    buffer.resize(start[b1] - base);
+    // Each entry's smallest id within its coarse bucket.
+    std::vector<std::uint16_t, UninitialisedAllocator<std::uint16_t>> fine(shift ? buffer.size()
+                                                                                 : 0);
+#pragma omp parallel for num_threads(parts) schedule(static, 1)
+    for (int t = 0; t < parts; ++t) {
+      std::vector<std::size_t> cursor(b1 - b0);
+      for (std::size_t b = b0; b < b1; ++b) {
+        cursor[b - b0] = start[b] - base;
+        for (int u = 0; u < t; ++u)
+          cursor[b - b0] += counts[std::size_t(u) * coarse + b];
+      }
+      std::array<VertexId, K> key;
+      for (std::size_t c = part_begin(t); c < part_begin(t + 1); ++c) {
+        const VertexId *cell = mesh.cell(CellId(c));
+        for (int m = 0; m < M; ++m) {
+          const VertexId low = min_of(cell, m);
+          if (low < lo_v || low >= hi_v)
+            continue;
+          const std::size_t at = cursor[(low >> shift) - b0]++;
+          buffer[at] = pack(cell, c, m, key);
+          if (shift)
+            fine[at] = std::uint16_t(low & mask);
         }
-        buffer[cursor[low - v0]++ - start[v0]] = Packed(p);
       }
     }
-    for (std::size_t v = v0; v < v1; ++v) {
-      const auto first = buffer.begin() + std::ptrdiff_t(start[v] - start[v0]);
-      const auto last = buffer.begin() + std::ptrdiff_t(start[v + 1] - start[v0]);
-      std::sort(first, last);
-      key[0] = VertexId(v);
-      for (auto i = first; i != last;) {
-        const Packed rest = *i >> kRefBits;
-        group.clear();
-        auto j = i;
-        for (; j != last && (*j >> kRefBits) == rest; ++j)
-          if constexpr (SideOnly)
-            group.push_back(std::uint32_t(*j & 1u) ? kSideBit : 0u);
-          else if constexpr (WithRefs)
-            group.push_back(std::uint32_t(*j));
-        for (int t = K - 1; t >= 1; --t)
-          key[t] =
-              VertexId((rest >> (kIdBits * (K - 1 - t))) & Packed(0xFFFFFFFFu >> (32 - kIdBits)));
-        visit(std::as_const(key), WithRefs ? group.data() : nullptr, int(j - i));
-        i = j;
+    const std::size_t k0 = b0 / kBlock, k1 = (b1 - 1) / kBlock + 1;
+    const int workers = Parallel ? int(std::min<std::size_t>(std::size_t(threads()), k1 - k0)) : 1;
+#pragma omp parallel num_threads(workers)
+    {
+      std::vector<std::uint32_t> group;
+      Buffer scratch;
+      std::vector<std::size_t> count(mask + 2);
+#pragma omp for schedule(dynamic, 1)
+      for (std::size_t k = k0; k < k1; ++k) {
+        auto &visit = visitor(k);
+        for (std::size_t b = std::max(b0, k * kBlock); b < std::min(b1, (k + 1) * kBlock); ++b) {
+          const std::size_t lo = start[b] - base, hi = start[b + 1] - base;
+          if (lo == hi)
+            continue;
+          if (!shift) {
+            visit_bucket(VertexId(b), buffer.begin() + std::ptrdiff_t(lo),
+                         buffer.begin() + std::ptrdiff_t(hi), group, visit);
+            continue;
+          }
+          std::fill(count.begin(), count.end(), 0);
+          for (std::size_t i = lo; i < hi; ++i)
+            ++count[fine[i] + 1];
+          for (std::size_t f = 1; f < count.size(); ++f)
+            count[f] += count[f - 1];
+          scratch.resize(hi - lo);
+          for (std::size_t i = lo; i < hi; ++i)
+            scratch[count[fine[i]]++] = buffer[i];
+          // count[f] is now the end of fine bucket f (and the start of f + 1).
+          std::size_t from = 0;
+          for (std::size_t f = 0; f <= mask && from < scratch.size(); ++f) {
+            const std::size_t to = count[f];
+            if (to > from)
+              visit_bucket(VertexId((b << shift) + f), scratch.begin() + std::ptrdiff_t(from),
+                           scratch.begin() + std::ptrdiff_t(to), group, visit);
+            from = to;
+          }
+        }
       }
     }
   }
@@ -225,10 +347,11 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
 // the facet's opposite vertex lies on the positive side of the facet (see
 // facet_side), so the visitor never has to look the cell up again.
 //
-// Counting sort by smallest id, in chunks of consecutive smallest ids so the
-// buffer stays below kChunkBytes: each chunk scans the cells (sequentially)
-// and stores, per sub-simplex whose smallest id falls in the chunk, one
-// integer packing the other K-1 ids and the reference, high to low bits.
+// Counting sort by smallest id (two levels, see Walk), in chunks of
+// consecutive smallest ids so the buffer stays below kChunkBytes: each chunk
+// scans the cells (sequentially) and stores, per sub-simplex whose smallest
+// id falls in the chunk, one integer packing the other K-1 ids and the
+// reference, high to low bits, and 2 bytes placing it in its coarse bucket.
 // Sorting a bucket of those integers groups equal sub-simplices; the cells
 // are never visited in random order.
 //
@@ -242,10 +365,32 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
                          const std::vector<std::int8_t> *signs = nullptr) {
   using W = Walk<Dim, K, WithRefs, SideOnly>;
   const W walk(mesh, signs);
-  std::vector<typename W::Packed, UninitialisedAllocator<typename W::Packed>> buffer;
-  const std::size_t cap = std::max<std::size_t>(kChunkBytes / sizeof(typename W::Packed), 1);
-  for (const auto &[v0, v1] : walk.chunks(cap))
-    walk.chunk(v0, v1, buffer, visit);
+  typename W::Buffer buffer;
+  const std::size_t cap =
+      std::max<std::size_t>(kChunkBytes / (sizeof(typename W::Packed) + sizeof(std::uint16_t)), 1);
+  for (const auto &[b0, b1] : walk.chunks(cap))
+    walk.template chunk<false>(
+        b0, b1, buffer, [&](std::size_t) -> auto & { return visit; });
+}
+
+// The same walk with the visiting shared by the threads: `visitors` is
+// resized to one copy of `prototype` per block of the walk (a piece fixed by
+// the mesh alone), and visitors[k] sees block k's sub-simplices in key order;
+// the caller combines the visitors' results in index order, which gives the
+// same result for every thread count.
+template <int Dim, int K, bool WithRefs = true, bool SideOnly = false, class Visitor>
+void for_each_subsimplex_blocks(const Mesh &mesh, const Visitor &prototype,
+                                std::vector<Visitor> &visitors,
+                                const std::vector<std::int8_t> *signs = nullptr) {
+  using W = Walk<Dim, K, WithRefs, SideOnly>;
+  const W walk(mesh, signs);
+  visitors.assign((walk.start.size() - 1 + W::kBlock - 1) / W::kBlock, prototype);
+  typename W::Buffer buffer;
+  const std::size_t cap =
+      std::max<std::size_t>(kChunkBytes / (sizeof(typename W::Packed) + sizeof(std::uint16_t)), 1);
+  for (const auto &[b0, b1] : walk.chunks(cap))
+    walk.template chunk<true>(
+        b0, b1, buffer, [&](std::size_t k) -> auto & { return visitors[k]; });
 }
 
 template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
@@ -447,17 +592,17 @@ template <int Dim> int facet_side(const VertexId *cell, int m, int cell_sign) {
 // final check; an overlap is reported by its facet only.
 // The facet visitor of facet_pass, accumulating into `r`.
 template <int Dim, bool SideOnly> struct FacetVisitor {
-  const Mesh &mesh;
+  const Mesh *mesh;
   const std::vector<std::int8_t> *signs;
   bool keep_boundary;
-  FacetReport &r;
+  FacetReport r;
   void operator()(const std::array<VertexId, Dim> &key, const std::uint32_t *refs, int count) {
     constexpr int M = Dim + 1;
     ++r.facets;
     if (count == 1) {
       ++r.boundary_facets;
       double pts[Dim * Dim];
-      gather<Dim>(mesh, key.data(), Dim, pts);
+      gather<Dim>(*mesh, key.data(), Dim, pts);
       const double measure = facet_measure<Dim>(pts);
       r.boundary_measure += measure;
       r.smallest_boundary_facet = std::min(r.smallest_boundary_facet, measure);
@@ -488,9 +633,24 @@ template <int Dim, bool SideOnly> struct FacetVisitor {
 template <int Dim, bool SideOnly = false>
 FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs,
                        bool keep_boundary) {
+  std::vector<FacetVisitor<Dim, SideOnly>> parts;
+  for_each_subsimplex_blocks<Dim, Dim, true, SideOnly>(
+      mesh, FacetVisitor<Dim, SideOnly>{&mesh, signs, keep_boundary, {}}, parts, signs);
+  // In block order, which is key order: the same sums and the same first
+  // finding as one walk in one thread.
   FacetReport r;
-  for_each_subsimplex<Dim, Dim, true, SideOnly>(
-      mesh, FacetVisitor<Dim, SideOnly>{mesh, signs, keep_boundary, r}, signs);
+  for (auto &part : parts) {
+    const FacetReport &p = part.r;
+    r.facets += p.facets;
+    r.boundary_facets += p.boundary_facets;
+    r.boundary_measure += p.boundary_measure;
+    r.smallest_boundary_facet = std::min(r.smallest_boundary_facet, p.smallest_boundary_facet);
+    r.boundary.insert(r.boundary.end(), p.boundary.begin(), p.boundary.end());
+    if (r.nonmanifold.empty())
+      r.nonmanifold = p.nonmanifold;
+    if (r.overlap.empty())
+      r.overlap = p.overlap;
+  }
   return r;
 }
 
@@ -525,22 +685,41 @@ std::string check_shape(const Mesh &mesh) {
 template <int Dim>
 double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_volume,
                  std::vector<std::int8_t> *signs = nullptr) {
-  const std::size_t nc = mesh.num_cells();
-  double pts[(Dim + 1) * Dim];
-  double total = 0;
-  first_degenerate = std::size_t(-1);
+  // Blocks of kBlock cells, summed in block order: the same total for every
+  // thread count.
+  constexpr std::size_t kBlock = std::size_t(1) << 14;
+  const std::size_t nc = mesh.num_cells(), blocks = (nc + kBlock - 1) / kBlock;
+  std::vector<double> sums(blocks, 0.0);
+  std::vector<std::size_t> first(blocks, std::size_t(-1));
+  std::vector<double> first_volume(blocks, 0.0);
   if (signs)
     signs->assign(nc, 0);
-  for (std::size_t c = 0; c < nc; ++c) {
-    gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
-    const double v = signed_volume(pts, Dim);
-    total += std::abs(v);
-    const bool bad = degenerate<Dim>(pts, v);
-    if (signs && !bad)
-      (*signs)[c] = v > 0 ? 1 : -1;
-    if (bad && first_degenerate == std::size_t(-1)) {
-      first_degenerate = c;
-      its_volume = v;
+  const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
+  for (std::size_t k = 0; k < blocks; ++k) {
+    double pts[(Dim + 1) * Dim];
+    double total = 0;
+    for (std::size_t c = k * kBlock; c < std::min(nc, (k + 1) * kBlock); ++c) {
+      gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
+      const double v = signed_volume(pts, Dim);
+      total += std::abs(v);
+      const bool bad = degenerate<Dim>(pts, v);
+      if (signs && !bad)
+        (*signs)[c] = v > 0 ? 1 : -1;
+      if (bad && first[k] == std::size_t(-1)) {
+        first[k] = c;
+        first_volume[k] = v;
+      }
+    }
+    sums[k] = total;
+  }
+  double total = 0;
+  first_degenerate = std::size_t(-1);
+  for (std::size_t k = 0; k < blocks; ++k) {
+    total += sums[k];
+    if (first_degenerate == std::size_t(-1) && first[k] != std::size_t(-1)) {
+      first_degenerate = first[k];
+      its_volume = first_volume[k];
     }
   }
   return total;

@@ -8,7 +8,7 @@ cd "$ROOT"
 # The layer of each public header in include/bisect/.
 declare -A layer_of=(
   [mesh]=core [error]=core [text]=core
-  [check]=measure [measure]=measure
+  [check]=measure [measure]=measure [threads]=measure
   [mark]=engine [refine]=engine [driver]=engine [indicator]=engine [coarsen]=engine
   [io]=io [state]=io [output]=io
   [region]=region

@@ -5,6 +5,7 @@
 #include "bisect/mark.hpp"
 #include "bisect/measure.hpp"
 #include "bisect/refine.hpp"
+#include "bisect/threads.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -492,4 +493,43 @@ TEST_CASE("final check: check_refined catches a hanging node, a split face, a de
     INFO("dim " << dim);
     CHECK(check_refined(m, inv).ok);
   }
+}
+
+TEST_CASE("checks: the same volumes, measures, verdicts and messages for 1, 2 and 3 threads",
+          "[check][threads][3d]") {
+  // Large enough for every parallel path: more than 131,072 cells (two
+  // parts of the scan), thousands of coarse buckets (many visitor blocks).
+  Mesh m = generate_kuhn(3, 12);
+  mark_mesh(m, Marking::Index);
+  const Invariants original = measure_invariants(m, true);
+  while (m.num_cells() < 140000)
+    refine_uniform(m);
+  // A broken copy: one cell's vertex moved onto a neighbour's (a fold and a
+  // hanging node at once), found by the walk, not by the cell pass.
+  Mesh broken = m;
+  broken.cells[4 * 100000 + 1] = broken.cells[4 * 100001 + 2];
+  INFO(m.num_cells() << " cells");
+  std::vector<Invariants> inv;
+  std::vector<std::string> verdicts;
+  for (int t : {1, 2, 3}) {
+    set_threads(t);
+    inv.push_back(measure_invariants(m, true));
+    const CheckResult good = check_refined(m, original);
+    CHECK(good.ok);
+    const CheckResult refined = check_refined(broken, original);
+    const CheckResult full = check_conformity(broken, &original);
+    CHECK(!refined.ok);
+    CHECK(!full.ok);
+    verdicts.push_back(refined.failure + " | " + full.failure);
+  }
+  set_threads(0);
+  for (std::size_t i = 1; i < inv.size(); ++i) {
+    // Bit for bit, not within a tolerance.
+    CHECK(inv[i].volume == inv[0].volume);
+    CHECK(inv[i].boundary_measure == inv[0].boundary_measure);
+    CHECK(inv[i].boundary_facets == inv[0].boundary_facets);
+    CHECK(inv[i].euler == inv[0].euler);
+    CHECK(verdicts[i] == verdicts[0]);
+  }
+  CHECK(std::abs(inv[0].volume - original.volume) < 1e-12 * original.volume);
 }
