@@ -298,7 +298,8 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
       }
     }
     const std::size_t k0 = b0 / kBlock, k1 = (b1 - 1) / kBlock + 1;
-    const int workers = Parallel ? int(std::min<std::size_t>(std::size_t(threads()), k1 - k0)) : 1;
+    // As many workers as scan parts: small meshes stay in this thread.
+    const int workers = Parallel ? int(std::min<std::size_t>(std::size_t(parts), k1 - k0)) : 1;
 #pragma omp parallel num_threads(workers)
     {
       std::vector<std::uint32_t> group;
