@@ -27,6 +27,10 @@ public:
   // drop cells here, e.g. the levelset indicator keeps the fraction where the
   // function curves most. The default keeps them all.
   virtual void filter(const Mesh &, std::vector<CellId> &) const {}
+  // Whether touches() may run in several threads at once (select_cells then
+  // splits the cells among them; the selection is the same either way). The
+  // default is no, for regions that keep state or call back into Python.
+  virtual bool concurrent() const { return false; }
 };
 
 // Parses a region spec for a mesh of dimension `dim`. `origin` names where the

@@ -11,6 +11,7 @@
 #include "io/vtu_write.hpp"
 
 #include "bisect/output.hpp"
+#include "bisect/threads.hpp"
 
 #include <lz4.h>
 #include <zlib.h>
@@ -229,7 +230,8 @@ template <> const char *type_name<float>() {
   return "Float32";
 }
 
-// Writes one DataArray element: `count` values of T, value(i) for the i-th.
+// Writes one DataArray element: `count` values of T, value(i) for the i-th
+// (called from several threads when compressing: it must only read).
 template <class T, class Value>
 void write_array(Writer &w, VtuCompression compression, int level, const std::string &name,
                  int components, std::size_t count, Value value, const char *extra = "") {
@@ -274,33 +276,57 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
                header.size() * sizeof(std::uint64_t));
       w.end_base64();
     }
-    std::vector<unsigned char> tmp, packed;
-    std::size_t block = 0;
-    for (std::size_t first = 0; first < count; first += per_block) {
-      fill(first);
-      const auto *src = reinterpret_cast<const unsigned char *>(raw.data());
-      const std::size_t n = raw.size() * sizeof(T);
-      std::size_t out = 0;
-      if (compression == VtuCompression::Zlib) {
-        uLongf room = compressBound(uLong(n));
-        tmp.resize(room);
-        if (compress2(tmp.data(), &room, src, uLong(n), level) != Z_OK)
-          throw CheckError("zlib failed to compress array '" + name + "'");
-        out = room;
-      } else {
-        const int room = LZ4_compressBound(int(n));
-        tmp.resize(std::size_t(room));
-        const int got = LZ4_compress_default(reinterpret_cast<const char *>(src),
-                                             reinterpret_cast<char *>(tmp.data()), int(n), room);
-        if (got <= 0)
-          throw CheckError("LZ4 failed to compress array '" + name + "'");
-        out = std::size_t(got);
+    // Blocks are filled and compressed kGroup at a time by all threads, each
+    // block on its own (so the bytes do not depend on the thread count), and
+    // written in order.
+    constexpr std::size_t kGroup = 64;
+    std::vector<std::vector<unsigned char>> out(std::min(blocks, kGroup));
+    std::vector<unsigned char> packed;
+    const int workers = int(std::clamp<std::size_t>(blocks / 8, 1, std::size_t(threads())));
+    for (std::size_t g0 = 0; g0 < blocks; g0 += kGroup) {
+      const std::size_t g1 = std::min(blocks, g0 + kGroup);
+      bool failed = false;
+#pragma omp parallel num_threads(workers)
+      {
+        std::vector<T> raw;
+        raw.reserve(per_block);
+#pragma omp for schedule(dynamic, 1)
+        for (std::size_t b = g0; b < g1; ++b) {
+          raw.clear();
+          for (std::size_t i = b * per_block; i < std::min(count, (b + 1) * per_block); ++i)
+            raw.push_back(value(i));
+          const auto *src = reinterpret_cast<const unsigned char *>(raw.data());
+          const std::size_t n = raw.size() * sizeof(T);
+          std::vector<unsigned char> &tmp = out[b - g0];
+          if (compression == VtuCompression::Zlib) {
+            uLongf room = compressBound(uLong(n));
+            tmp.resize(room);
+            if (compress2(tmp.data(), &room, src, uLong(n), level) != Z_OK)
+              failed = true;
+            tmp.resize(room);
+          } else {
+            const int room = LZ4_compressBound(int(n));
+            tmp.resize(std::size_t(room));
+            const int got =
+                LZ4_compress_default(reinterpret_cast<const char *>(src),
+                                     reinterpret_cast<char *>(tmp.data()), int(n), room);
+            if (got <= 0)
+              failed = true;
+            tmp.resize(std::size_t(std::max(got, 0)));
+          }
+        }
       }
-      header[3 + block++] = out;
-      if (stream)
-        w.base64(tmp.data(), out);
-      else
-        packed.insert(packed.end(), tmp.begin(), tmp.begin() + std::ptrdiff_t(out));
+      if (failed)
+        throw CheckError(std::string(compression == VtuCompression::Zlib ? "zlib" : "LZ4") +
+                         " failed to compress array '" + name + "'");
+      for (std::size_t b = g0; b < g1; ++b) {
+        const std::vector<unsigned char> &tmp = out[b - g0];
+        header[3 + b] = tmp.size();
+        if (stream)
+          w.base64(tmp.data(), tmp.size());
+        else
+          packed.insert(packed.end(), tmp.begin(), tmp.end());
+      }
     }
     if (stream) {
       w.end_base64();
@@ -423,9 +449,11 @@ void write_cell_arrays_with_entities(Writer &w, VtuCompression compression, int 
       add(same_array(b.data, *f), b.size());
     // NaN padding must not be guessed as Int32.
     const ValueType type = f->type == ValueType::Unknown && !integer ? ValueType::Float64 : f->type;
-    std::size_t at = 0; // the segment of the last value (values come in order)
+    // Blocks are encoded by several threads: each value finds its segment
+    // (a handful) by itself.
     write_values(w, compression, level, f->name, f->components, total, type,
                  type == ValueType::Unknown, [&](std::size_t i) {
+                   std::size_t at = 0;
                    while (i >= segments[at].first + segments[at].count)
                      ++at;
                    const Segment &s = segments[at];

@@ -349,6 +349,7 @@ template <int D> bool simplex_meets_box(const double *verts, const double *lo, c
 
 template <int D> class SphereRegion final : public Region {
 public:
+  bool concurrent() const override { return true; }
   SphereRegion(const std::vector<double> &c, double r, bool solid) : r_(r), solid_(solid) {
     std::copy(c.begin(), c.end(), c_);
     r2lo_ = r * r * (1 - kRadiusSlack);
@@ -373,6 +374,7 @@ private:
 
 template <int D> class HemisphereRegion final : public Region {
 public:
+  bool concurrent() const override { return true; }
   HemisphereRegion(const std::vector<double> &c, double r, const std::vector<double> &n,
                    double offset)
       : r_(r), offset_(offset) {
@@ -440,6 +442,7 @@ private:
 
 template <int D> class BoxRegion final : public Region {
 public:
+  bool concurrent() const override { return true; }
   BoxRegion(const std::vector<double> &lo, const std::vector<double> &hi) {
     std::copy(lo.begin(), lo.end(), lo_);
     std::copy(hi.begin(), hi.end(), hi_);
@@ -470,6 +473,7 @@ private:
 
 template <int D> class HalfspaceRegion final : public Region {
 public:
+  bool concurrent() const override { return true; }
   HalfspaceRegion(const std::vector<double> &n, double offset) : offset_(offset) {
     std::copy(n.begin(), n.end(), n_);
   }
@@ -503,6 +507,7 @@ private:
 template <int D> class MovingSphereRegion final : public Region {
   static constexpr int M = D - 1; // space dimensions
 public:
+  bool concurrent() const override { return true; }
   MovingSphereRegion(const std::vector<double> &c, const std::vector<double> &v, double r,
                      bool solid)
       : r_(r), solid_(solid) {
@@ -538,6 +543,10 @@ private:
 // conservative answer, see the top of the file).
 class SetRegion final : public Region {
 public:
+  bool concurrent() const override {
+    return std::all_of(members_.begin(), members_.end(),
+                       [](const auto &m) { return m->concurrent(); });
+  }
   SetRegion(std::vector<std::unique_ptr<Region>> members, int dim, bool all)
       : members_(std::move(members)), all_(all) {
     for (const auto &m : members_) {

@@ -1,5 +1,6 @@
 // Region selection: the cells whose closed simplex touches a region.
 #include "bisect/region.hpp"
+#include "bisect/threads.hpp"
 
 #include <algorithm>
 
@@ -9,26 +10,44 @@ std::vector<CellId> select_cells(const Mesh &mesh, const Region &region) {
   const int dim = mesh.dim, nv = dim + 1;
   double lo[4], hi[4];
   region.bounds(lo, hi, dim);
-  std::vector<CellId> out;
-  double pts[5 * 4];
-  for (std::size_t c = 0; c < mesh.num_cells(); ++c) {
-    const VertexId *x = mesh.cell(CellId(c));
-    bool outside = false;
-    for (int k = 0; k < dim && !outside; ++k) {
-      double a = mesh.point(x[0])[k], b = a;
-      for (int i = 1; i < nv; ++i) {
-        double v = mesh.point(x[i])[k];
-        a = std::min(a, v);
-        b = std::max(b, v);
+  // Blocks of cells, each selecting into its own list, joined in order: the
+  // same selection for every thread count.
+  constexpr std::size_t kBlock = std::size_t(1) << 14;
+  const std::size_t nc = mesh.num_cells(), blocks = (nc + kBlock - 1) / kBlock;
+  std::vector<std::vector<CellId>> found(blocks);
+  const int workers =
+      region.concurrent() ? int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads()))) : 1;
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 2)
+  for (std::size_t k = 0; k < blocks; ++k) {
+    double pts[5 * 4];
+    for (std::size_t c = k * kBlock; c < std::min(nc, (k + 1) * kBlock); ++c) {
+      const VertexId *x = mesh.cell(CellId(c));
+      bool outside = false;
+      for (int d = 0; d < dim && !outside; ++d) {
+        double a = mesh.point(x[0])[d], b = a;
+        for (int i = 1; i < nv; ++i) {
+          double v = mesh.point(x[i])[d];
+          a = std::min(a, v);
+          b = std::max(b, v);
+        }
+        outside = b < lo[d] || a > hi[d];
       }
-      outside = b < lo[k] || a > hi[k];
+      if (outside)
+        continue;
+      for (int i = 0; i < nv; ++i)
+        std::copy(mesh.point(x[i]), mesh.point(x[i]) + dim, pts + i * dim);
+      if (region.touches(pts, dim))
+        found[k].push_back(CellId(c));
     }
-    if (outside)
-      continue;
-    for (int i = 0; i < nv; ++i)
-      std::copy(mesh.point(x[i]), mesh.point(x[i]) + dim, pts + i * dim);
-    if (region.touches(pts, dim))
-      out.push_back(CellId(c));
+  }
+  std::size_t total = 0;
+  for (const auto &f : found)
+    total += f.size();
+  std::vector<CellId> out;
+  out.reserve(total);
+  for (auto &f : found) {
+    out.insert(out.end(), f.begin(), f.end());
+    std::vector<CellId>().swap(f);
   }
   region.filter(mesh, out); // e.g. the levelset indicator keeps a fraction
   return out;
