@@ -37,7 +37,7 @@ std::vector<char> marked_cells(const Mesh &mesh, const CoarsenArgs &a) {
   } else {
     // A cell array, or a point array (a cell takes its vertices' max).
     const std::vector<double> values = cell_indicator(mesh, a.indicator, a.input);
-    for (CellId c : mark_by_indicator(values, IndicatorRule::Below, a.below, a.input))
+    for (CellId c : mark_by_indicator(values, IndicatorRule::Below, a.below, a.input, &mesh))
       marks[c] = 1;
   }
   return marks;

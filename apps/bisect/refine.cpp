@@ -125,7 +125,7 @@ int run_refine(const RefineArgs &a) {
                                      a.above ? *a.above
                                      : a.top ? *a.top
                                              : *a.dorfler,
-                                     a.input);
+                                     a.input, &mesh);
   }
   Selector select = [&](const Mesh &m) {
     if (a.indicator.empty())

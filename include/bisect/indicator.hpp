@@ -18,9 +18,11 @@ enum class IndicatorRule {
 };
 
 // The marked cells (increasing ids). Throws UsageError for a parameter out of
-// range and InputError (naming `file`) for a negative value under Dorfler.
+// range and InputError (naming `file`, and the cell as `mesh` numbers it when
+// given: see names.hpp) for a negative value under Dorfler.
 std::vector<CellId> mark_by_indicator(const std::vector<double> &values, IndicatorRule rule,
-                                      double parameter, const std::string &file = {});
+                                      double parameter, const std::string &file = {},
+                                      const Mesh *mesh = nullptr);
 
 // One value per cell from the array `name` of `mesh`: a one-component cell
 // array, or a one-component point array (a cell's value is the largest of its

@@ -132,6 +132,25 @@ struct PhysicalName {
   std::string name;
 };
 
+// How messages about a mesh as read name its vertices and cells: 0-based
+// indices ("vertex 12", "cell 5") unless a reader says otherwise. The .msh
+// reader records Gmsh's node and element tags, so that messages name them
+// ("node 205", "element 17"); names.hpp formats every message through it.
+// It applies only while sized for the mesh (`vertices`, `cells`); refine()
+// and coarsen() clear it, and so must other code that renumbers.
+struct FileNumbering {
+  bool gmsh = false;                       // names are Gmsh node and element tags
+  std::size_t vertices = 0, cells = 0;     // the counts it was made for
+  std::vector<std::uint64_t> node_tags;    // per vertex; empty: node_base + index
+  std::uint64_t node_base = 1;             //
+  std::vector<std::uint64_t> element_tags; // per cell; empty: element_base + index
+  std::uint64_t element_base = 1;
+  std::uint64_t node(VertexId v) const { return node_tags.empty() ? node_base + v : node_tags[v]; }
+  std::uint64_t element(std::uint32_t c) const {
+    return element_tags.empty() ? element_base + c : element_tags[c];
+  }
+};
+
 struct Mesh {
   int dim = 0;                   // 2, 3 or 4: space dimension == cell dimension
   std::vector<double> coords;    // dim values per vertex
@@ -144,6 +163,7 @@ struct Mesh {
   std::vector<DataArray> cell_data;
   std::vector<Entities> entities; // see Entities; usually empty
   std::vector<PhysicalName> physical_names;
+  FileNumbering numbering; // see FileNumbering; default: 0-based indices
   // The bisection tree, what coarsening needs (ALGORITHMS.md §10). Either
   // both empty (no tree: every cell has generation 0 and every vertex is
   // original) or sized for the mesh: refine() fills them in (O(1) per

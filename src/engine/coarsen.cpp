@@ -734,6 +734,7 @@ CoarsenResult coarsen(Mesh &mesh, const std::vector<char> &marked_cells,
   CoarsenResult result;
   if (!mesh.marked() || !mesh.has_tree())
     return result;
+  mesh.numbering = {}; // messages from here on name bisect's own ids
   std::vector<char> marks = marked_cells;
   for (int p = 1; options.passes <= 0 || p <= options.passes; ++p) {
     CoarsenPass pass = dispatch(mesh.dim, [&]<int D>() {

@@ -2,6 +2,8 @@
 // sort of the candidate ids by value for Top and Dorfler.
 #include "bisect/indicator.hpp"
 
+#include "core/names.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -29,7 +31,7 @@ std::vector<CellId> by_value(const std::vector<double> &values) {
 } // namespace
 
 std::vector<CellId> mark_by_indicator(const std::vector<double> &values, IndicatorRule rule,
-                                      double parameter, const std::string &file) {
+                                      double parameter, const std::string &file, const Mesh *mesh) {
   std::vector<CellId> out;
   switch (rule) {
   case IndicatorRule::Above:
@@ -55,8 +57,8 @@ std::vector<CellId> mark_by_indicator(const std::vector<double> &values, Indicat
     double total = 0;
     for (std::size_t c = 0; c < values.size(); ++c) {
       if (values[c] < 0)
-        throw InputError(file, "cell " + std::to_string(c) + ": indicator value " +
-                                   number(values[c]) +
+        throw InputError(file, (mesh ? cell_name(*mesh, CellId(c)) : "cell " + std::to_string(c)) +
+                                   ": indicator value " + number(values[c]) +
                                    " is negative (Dorfler marking sums squares of values >= 0)");
       total += values[c] * values[c];
     }
@@ -104,7 +106,7 @@ std::vector<double> cell_indicator(const Mesh &mesh, const std::string &name,
                                " components; an indicator has one value per cell or vertex");
   for (std::size_t i = 0; i < a.values.size(); ++i)
     if (!std::isfinite(a.values[i]))
-      throw InputError(file, std::string(cell ? "cell " : "vertex ") + std::to_string(i) +
+      throw InputError(file, (cell ? cell_name(mesh, CellId(i)) : vertex_name(mesh, VertexId(i))) +
                                  ": indicator '" + name + "' is " + number(a.values[i]));
   if (cell)
     return a.values;

@@ -7,6 +7,7 @@
 #include "bisect/measure.hpp"
 #include "core/dimension.hpp"
 #include "core/geometry.hpp"
+#include "core/names.hpp"
 #include "core/numbering.hpp"
 
 #include <algorithm>
@@ -413,13 +414,6 @@ private:
   bool comparing_ = false, differs_ = false;
 };
 
-std::string id_tuple(const VertexId *x, int count) {
-  std::string s = "(";
-  for (int i = 0; i < count; ++i)
-    s += (i ? ", " : "") + std::to_string(x[i]);
-  return s + ")";
-}
-
 } // namespace
 
 std::string check_state_consistency(const Mesh &mesh) {
@@ -466,8 +460,8 @@ std::string check_state_consistency(const Mesh &mesh) {
         if (k != i)
           facet[m++] = mesh.cell(a)[k];
       std::sort(facet, facet + D);
-      failure = "cells " + std::to_string(a) + " and " + std::to_string(b) +
-                " would bisect their shared facet " + id_tuple(facet, D) + " differently";
+      failure = cell_pair_name(mesh, a, b) + " would bisect their shared facet " +
+                face_ids(mesh, facet, D) + " differently";
       return false;
     });
   });

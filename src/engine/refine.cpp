@@ -438,6 +438,7 @@ RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected, const Refin
     throw CheckError("refine: the mesh is not marked");
   RefineLimits l = limits;
   l.max_cells = std::min<std::size_t>(l.max_cells, kNoCell - 1);
+  mesh.numbering = {}; // messages from here on name bisect's own ids
   return dispatch(mesh.dim, [&]<int D>() { return refine_dim<D>(mesh, selected, l); });
 }
 

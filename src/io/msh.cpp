@@ -1150,6 +1150,37 @@ void add_entities(Source &src, const MshFile &f, const std::vector<VertexId> &ve
   m.physical_names = f.physical_names;
 }
 
+// Messages about the mesh name Gmsh's node and element tags (mesh.hpp,
+// FileNumbering): vertices are the used nodes in tag order, cells the
+// elements in tag order (`order`, or file order when empty). Tags that are
+// the index plus a constant (the usual file) are kept as that constant.
+void number_by_tags(const MshFile &f, const std::vector<VertexId> &vertex_of,
+                    const std::vector<std::uint32_t> &order, Mesh &m) {
+  FileNumbering &n = m.numbering;
+  n.gmsh = true;
+  n.vertices = m.num_vertices();
+  n.cells = m.num_cells();
+  auto settle = [](std::vector<std::uint64_t> &tags, std::uint64_t &base) {
+    bool dense = true;
+    for (std::size_t i = 1; i < tags.size() && dense; ++i)
+      dense = tags[i] == tags[0] + i;
+    if (dense) {
+      base = tags.empty() ? 1 : tags[0];
+      tags = {};
+    }
+  };
+  n.node_tags.reserve(n.vertices);
+  for (std::size_t p = 0; p < vertex_of.size(); ++p)
+    if (vertex_of[p] != kNoVertex)
+      n.node_tags.push_back(f.nodes.tag[p]);
+  settle(n.node_tags, n.node_base);
+  const Simplices &s = f.simplices[m.dim];
+  n.element_tags.reserve(n.cells);
+  for (std::size_t i = 0; i < s.size(); ++i)
+    n.element_tags.push_back(s.tag[order.empty() ? i : order[i]]);
+  settle(n.element_tags, n.element_base);
+}
+
 Mesh assemble(Source &src, MshFile &f) {
   reject_duplicate_elements(src, f);
   const int dim = cell_dimension(src, f);
@@ -1214,6 +1245,8 @@ Mesh assemble(Source &src, MshFile &f) {
     }
   }
   add_entities(src, f, vertex_of, m);
+  number_by_tags(f, vertex_of, by_tag.size() == s.size() ? by_tag : std::vector<std::uint32_t>(),
+                 m);
   return m;
 }
 

@@ -1,6 +1,8 @@
 // The bisection state in files: cell arrays bisect:* (README, "Files").
 #include "bisect/state.hpp"
 
+#include "core/names.hpp"
+
 #include "bisect/mark.hpp"
 #include "bisect/measure.hpp"
 
@@ -171,13 +173,13 @@ bool decode_state(Mesh &mesh, const std::string &path) {
           if (r == -1)
             continue;
           if (!(r >= 0 && r < 4294967295.0 && r == std::floor(r)))
-            throw InputError(path, "cell " + std::to_string(c) + ": " + kEdgeRankArray + " holds " +
+            throw InputError(path, cell_name(mesh, CellId(c)) + ": " + kEdgeRankArray + " holds " +
                                        std::to_string(r) + ", not a rank");
           auto [it, fresh] = mesh.edge_rank.emplace(edge_key(x[i], x[j]), std::uint32_t(r));
           if (!fresh && it->second != std::uint32_t(r))
-            throw InputError(path, "cell " + std::to_string(c) + ": " + kEdgeRankArray +
-                                       " gives edge " + std::to_string(x[i]) + "-" +
-                                       std::to_string(x[j]) + " two different ranks");
+            throw InputError(path, cell_name(mesh, CellId(c)) + ": " + kEdgeRankArray +
+                                       " gives edge " + vertex_number(mesh, x[i]) + "-" +
+                                       vertex_number(mesh, x[j]) + " two different ranks");
         }
     }
   }
@@ -186,7 +188,7 @@ bool decode_state(Mesh &mesh, const std::string &path) {
   for (std::size_t c = 0; c < nc; ++c) {
     auto bad = [&](const std::string &what) {
       return InputError(path,
-                        "cell " + std::to_string(c) + ": invalid bisection state (" + what + ")");
+                        cell_name(mesh, CellId(c)) + ": invalid bisection state (" + what + ")");
     };
     if (marking.values[c] != m0)
       throw bad("mixed " + std::string(kMarkingArray));

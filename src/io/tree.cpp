@@ -3,6 +3,8 @@
 // One component each, so that every converter keeps them.
 #include "bisect/state.hpp"
 
+#include "core/names.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -32,8 +34,8 @@ bool is_tree_array(const DataArray &a) {
 }
 
 // The array's values as integers in [lo, hi]; InputError naming the entity.
-void check_integers(const DataArray &a, std::size_t count, double lo, double hi, const char *entity,
-                    const std::string &path) {
+void check_integers(const Mesh &mesh, const DataArray &a, std::size_t count, double lo, double hi,
+                    const char *entity, const std::string &path) {
   if (a.components != 1)
     throw InputError(path,
                      a.name + " has " + std::to_string(a.components) + " components; expected 1");
@@ -43,8 +45,10 @@ void check_integers(const DataArray &a, std::size_t count, double lo, double hi,
   for (std::size_t i = 0; i < count; ++i) {
     const double v = a.values[i];
     if (!(v >= lo && v <= hi && v == std::floor(v)))
-      throw InputError(path, std::string(entity) + " " + std::to_string(i) + ": " + a.name +
-                                 " holds " + std::to_string(v) + ", not an integer in " +
+      throw InputError(path, (entity == std::string("cell") ? cell_name(mesh, CellId(i))
+                                                            : vertex_name(mesh, VertexId(i))) +
+                                 ": " + a.name + " holds " + std::to_string(v) +
+                                 ", not an integer in " +
                                  std::to_string(static_cast<long long>(lo)) + ".." +
                                  std::to_string(static_cast<long long>(hi)));
   }
@@ -107,19 +111,19 @@ bool decode_tree(Mesh &mesh, const std::string &path) {
     // No bisection sequence doubles resolve is deeper than kMaxGeneration
     // (the precision limit stops any edge after about 1,100 halvings, dim
     // generations each); a deeper value is not bisect's and would overflow.
-    check_integers(*generation, nc, 0, kMaxGeneration, "cell", path);
+    check_integers(mesh, *generation, nc, 0, kMaxGeneration, "cell", path);
     for (std::size_t c = 0; c < nc; ++c)
       gen[c] = std::uint16_t(generation->values[c]);
   }
   std::vector<VertexId> parents(2 * nv, kNoVertex);
   if (pa) {
     const double top = double(nv) - 1;
-    check_integers(*pa, nv, -1, top, "vertex", path);
-    check_integers(*pb, nv, -1, top, "vertex", path);
+    check_integers(mesh, *pa, nv, -1, top, "vertex", path);
+    check_integers(mesh, *pb, nv, -1, top, "vertex", path);
     for (std::size_t v = 0; v < nv; ++v) {
       const double a = pa->values[v], b = pb->values[v];
       auto bad = [&](const std::string &what) {
-        return InputError(path, "vertex " + std::to_string(v) + ": " + kParentAArray + " " +
+        return InputError(path, vertex_name(mesh, VertexId(v)) + ": " + kParentAArray + " " +
                                     std::to_string(static_cast<long long>(a)) + ", " +
                                     kParentBArray + " " +
                                     std::to_string(static_cast<long long>(b)) + ": " + what);
@@ -149,13 +153,13 @@ bool decode_tree(Mesh &mesh, const std::string &path) {
   // it is only a hint for coarsening, whose merges are all checked).
   std::vector<std::uint16_t> levels;
   if (level) {
-    check_integers(*level, nv, 0, std::numeric_limits<std::uint16_t>::max(), "vertex", path);
+    check_integers(mesh, *level, nv, 0, std::numeric_limits<std::uint16_t>::max(), "vertex", path);
     levels.resize(nv);
     for (std::size_t v = 0; v < nv; ++v) {
       levels[v] = std::uint16_t(level->values[v]);
       if ((levels[v] == 0) != (parents[2 * v] == kNoVertex))
         throw InputError(path,
-                         "vertex " + std::to_string(v) + ": " + kLevelArray + " " +
+                         vertex_name(mesh, VertexId(v)) + ": " + kLevelArray + " " +
                              std::to_string(levels[v]) +
                              (levels[v] == 0 ? " (original) but it is a midpoint"
                                              : " (made by bisection) but it has no parent edge"));

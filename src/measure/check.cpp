@@ -12,6 +12,7 @@
 #include "bisect/check.hpp"
 #include "core/dimension.hpp"
 #include "core/geometry.hpp"
+#include "core/names.hpp"
 
 #include "bisect/measure.hpp"
 #include "bisect/threads.hpp"
@@ -533,18 +534,14 @@ template <int Dim> void gather(const Mesh &mesh, const VertexId *ids, int count,
 
 // ---- messages ---------------------------------------------------------------
 
-template <std::size_t K> std::string id_list(const std::array<VertexId, K> &key) {
-  std::string s = "(";
-  for (std::size_t i = 0; i < K; ++i)
-    s += (i ? ", " : "") + std::to_string(key[i]);
-  return s + ")";
+// Vertices, cells and faces are named through core/names.hpp: indices, or
+// a .msh input's node and element tags.
+template <std::size_t K> std::string id_list(const Mesh &mesh, const std::array<VertexId, K> &key) {
+  return face_ids(mesh, key.data(), int(K));
 }
 
-std::string id_list(const VertexId *ids, int count) {
-  std::string s = "(";
-  for (int i = 0; i < count; ++i)
-    s += (i ? ", " : "") + std::to_string(ids[i]);
-  return s + ")";
+std::string id_list(const Mesh &mesh, const VertexId *ids, int count) {
+  return face_ids(mesh, ids, count);
 }
 
 std::string format(const char *fmt, double a, double b, double c) {
@@ -614,7 +611,7 @@ template <int Dim, bool SideOnly> struct FacetVisitor {
         return;
       if constexpr (SideOnly) {
         if (refs[0] == refs[1])
-          r.overlap = "two cells overlap across facet " + id_list(key);
+          r.overlap = "two cells overlap across facet " + id_list(*mesh, key);
         return;
       }
       const CellId cells[2] = {CellId((refs[0] & ~kSideBit) / M),
@@ -623,10 +620,11 @@ template <int Dim, bool SideOnly> struct FacetVisitor {
       if ((*signs)[cells[0]] == 0 || (*signs)[cells[1]] == 0)
         return;
       if ((refs[0] & kSideBit) == (refs[1] & kSideBit))
-        r.overlap = "cells " + std::to_string(cells[0]) + " and " + std::to_string(cells[1]) +
-                    " overlap across facet " + id_list(key);
+        r.overlap = cell_pair_name(*mesh, cells[0], cells[1]) + " overlap across facet " +
+                    id_list(*mesh, key);
     } else if (r.nonmanifold.empty()) {
-      r.nonmanifold = "facet " + id_list(key) + " is shared by " + std::to_string(count) + " cells";
+      r.nonmanifold =
+          "facet " + id_list(*mesh, key) + " is shared by " + std::to_string(count) + " cells";
     }
   }
 };
@@ -878,10 +876,10 @@ std::string find_hanging_node(const Mesh &mesh, const std::vector<VertexId> &bnd
       };
       auto report = [&](std::size_t payload) {
         if (pass == 0)
-          return "vertex " + std::to_string(payload) + " lies on facet " + id_list(ids, Dim) +
-                 " (hanging node)";
-        return "boundary facets " + id_list(&bnd[payload * Dim], Dim) + " and " +
-               id_list(ids, Dim) +
+          return vertex_name(mesh, VertexId(payload)) + " lies on facet " +
+                 id_list(mesh, ids, Dim) + " (hanging node)";
+        return "boundary facets " + id_list(mesh, &bnd[payload * Dim], Dim) + " and " +
+               id_list(mesh, ids, Dim) +
                " overlap: the cells on the two sides of a face split it differently";
       };
       if (cover > double(grid.size())) { // a huge facet: scanning everything is cheaper
@@ -940,8 +938,8 @@ std::string find_duplicate_vertices(const Mesh &mesh) {
   std::string at;
   for (int k = 0; k < d; ++k)
     at += (k ? ", " : "") + format("%.17g", mesh.point(first_a)[k], 0, 0);
-  return "duplicate vertices: " + std::to_string(first_a) + " and " + std::to_string(first_b) +
-         " are both at (" + at + ")" +
+  return std::string("duplicate ") + vertex_word(mesh, true) + ": " + vertex_number(mesh, first_a) +
+         " and " + vertex_number(mesh, first_b) + " are both at (" + at + ")" +
          (pairs > 1 ? " (and " + std::to_string(pairs - 1) + " more pairs)" : std::string()) +
          "; the cells on either side do not share them, so the mesh is not connected there "
          "(merge coincident nodes, e.g. with Gmsh's Coherence Mesh)";
@@ -1123,9 +1121,8 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
           inside = lambda > 1e-9;
         }
         if (inside && rest > 1e-9)
-          return "cells " + std::to_string(c) + " and " + std::to_string(o) +
-                 " overlap (the centroid of cell " + std::to_string(o) + " lies inside cell " +
-                 std::to_string(c) + ")";
+          return cell_pair_name(mesh, CellId(c), CellId(o)) + " overlap (the centroid of " +
+                 cell_name(mesh, CellId(o)) + " lies inside " + cell_name(mesh, CellId(c)) + ")";
       }
       int d = 1;
       while (d < Dim && ++idx[d] > ihi[d])
@@ -1440,7 +1437,7 @@ template <int Dim> std::string find_fold(const Mesh &mesh) {
       const int n = int(start[v + 1] - start[v]);
       const VertexId face = VertexId(v);
       if (n > 0 && star.tangled(&face, &pairs[2 * start[v]], n, f))
-        return angle_message("vertex " + std::to_string(v), f, 2);
+        return angle_message(vertex_name(mesh, VertexId(v)), f, 2);
     }
     return {};
   } else {
@@ -1460,7 +1457,7 @@ template <int Dim> std::string find_fold(const Mesh &mesh) {
                 extras.push_back(cell[k]);
           }
           if (star.tangled(key.data(), extras.data(), count, f))
-            found = angle_message((Dim == 3 ? "edge " : "triangle ") + id_list(key), f, Dim);
+            found = angle_message((Dim == 3 ? "edge " : "triangle ") + id_list(mesh, key), f, Dim);
         });
     return found;
   }
@@ -1491,10 +1488,10 @@ Invariants measure_invariants(const Mesh &mesh, bool euler) {
 }
 
 // "cell 7 is degenerate (volume 1e-20)", for the checks of a whole mesh.
-static std::string degenerate_cell(std::size_t cell, double volume) {
+static std::string degenerate_cell(const Mesh &mesh, std::size_t cell, double volume) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%g", volume);
-  return "cell " + std::to_string(cell) + " is degenerate (volume " + buf + ")";
+  return cell_name(mesh, CellId(cell)) + " is degenerate (volume " + buf + ")";
 }
 
 CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
@@ -1510,7 +1507,7 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
     std::vector<std::int8_t> signs;
     const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
     if (bad != std::size_t(-1))
-      return fail(degenerate_cell(bad, bad_volume));
+      return fail(degenerate_cell(mesh, bad, bad_volume));
     const FacetReport fr = facet_pass<D>(mesh, &signs, true);
     if (!fr.nonmanifold.empty())
       return fail(fr.nonmanifold);
@@ -1557,7 +1554,7 @@ CheckResult check_refined(const Mesh &mesh, const Invariants &original) {
     std::vector<std::int8_t> signs;
     const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
     if (bad != std::size_t(-1))
-      return fail(degenerate_cell(bad, bad_volume));
+      return fail(degenerate_cell(mesh, bad, bad_volume));
     const FacetReport fr = mesh.num_vertices() < std::size_t(kSideBit)
                                ? facet_pass<D, true>(mesh, &signs, true)
                                : facet_pass<D>(mesh, &signs, true);
@@ -1612,7 +1609,7 @@ void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &prog
   for (std::size_t v = 0; v < nv; ++v)
     for (int d = 0; d < mesh.dim; ++d)
       if (!std::isfinite(mesh.point(VertexId(v))[d]))
-        throw InputError(path, "vertex " + std::to_string(v) + " has a non-finite coordinate");
+        throw InputError(path, vertex_name(mesh, VertexId(v)) + " has a non-finite coordinate");
   if (std::string s = check_ids(mesh); !s.empty())
     throw InputError(path, s);
   const int n = mesh.cell_size();
@@ -1621,40 +1618,43 @@ void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &prog
     for (int i = 0; i < n; ++i)
       for (int j = i + 1; j < n; ++j)
         if (cell[i] == cell[j])
-          throw InputError(path, "cell " + std::to_string(c) + " repeats vertex " +
-                                     std::to_string(cell[i]));
+          throw InputError(path,
+                           cell_name(mesh, CellId(c)) + " repeats " + vertex_name(mesh, cell[i]));
   }
+  // A mesh that fails a check below and has coincident duplicate vertices
+  // (exported without merging nodes: zero-volume cells, hanging nodes, ...)
+  // is reported by its duplicates, the cause; looked for only on failure.
+  auto reject = [&](const std::string &what) {
+    if (std::string d = find_duplicate_vertices(mesh); !d.empty())
+      throw InputError(path, d);
+    throw InputError(path, what);
+  };
   dispatch(mesh.dim, [&]<int D>() {
     std::size_t bad;
     double bad_volume = 0;
     std::vector<std::int8_t> signs;
     cell_pass<D>(mesh, bad, bad_volume, &signs);
     if (bad != std::size_t(-1))
-      throw InputError(path, "cell " + std::to_string(bad) + " has zero volume");
+      reject(cell_name(mesh, CellId(bad)) + " has zero volume");
     step("matching facets", 0.4);
     const FacetReport fr = facet_pass<D>(mesh, &signs, true);
     if (!fr.nonmanifold.empty()) {
       // "facet (a, b) is shared by 3 cells" -> "non-manifold: facet (a, b) shared by 3 cells"
       std::string s = fr.nonmanifold;
       s.replace(s.find(" is shared"), 10, " shared");
-      throw InputError(path, "non-manifold: " + s);
+      reject("non-manifold: " + s);
     }
     if (!fr.overlap.empty())
-      throw InputError(path, "tangled: " + fr.overlap);
+      reject("tangled: " + fr.overlap);
     step("looking for hanging nodes", 0.55);
-    if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty()) {
-      // Coincident duplicate vertices (a mesh exported without merging
-      // nodes) look like hanging nodes; say what they are.
-      if (std::string d = find_duplicate_vertices(mesh); !d.empty())
-        throw InputError(path, d);
-      throw InputError(path, "non-conforming input: " + s);
-    }
+    if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
+      reject("non-conforming input: " + s);
     step("looking for overlapping cells", 0.6);
     if (std::string s = find_overlap<D>(mesh); !s.empty())
-      throw InputError(path, "tangled: " + s);
+      reject("tangled: " + s);
     step("checking the angles around faces", 0.75);
     if (std::string s = find_fold<D>(mesh); !s.empty())
-      throw InputError(path, s);
+      reject(s);
     // Orient every cell positively (a negatively oriented cell is not an error).
     for (std::size_t c = 0; c < nc; ++c)
       if (signs[c] < 0)

@@ -241,6 +241,124 @@ bad("binary22-nan.msh", bin22(SQ_NODES[:2] + [(3, float("nan"), 1, 0), SQ_NODES[
                               SQ_TRI_IDS), "non-finite")
 
 
+# ------------------------------------- messages in the file's own numbering
+# Errors about a .msh name Gmsh's node and element tags, never bisect's
+# 0-based indices. These files tag nodes 101, 205, 309, ... (node i of the
+# small meshes above becomes 101 + 104 (i - 1)) and elements 17, 23, 29, ...
+# (element j becomes 17 + 6 (j - 1)), and list both in reverse order.
+
+def node_tag(i):
+    return 101 + 104 * (i - 1)
+
+
+def elem_tag(j):
+    return 17 + 6 * (j - 1)
+
+
+def retag(nodes, elements):
+    """Tagged as above, in reverse order; elements: [(tag, type, tags, nodes)]."""
+    ns = [(node_tag(t), x, y, z) for t, x, y, z in nodes][::-1]
+    es = [(elem_tag(t), typ, tags, [node_tag(n) for n in nn]) for t, typ, tags, nn in elements]
+    return ns, es[::-1]
+
+
+def msh41_ascii(nodes, elements):
+    """One node block and one element block (all elements of one type)."""
+    dim = {2: 2, 4: 3}[elements[0][1]]
+    tags = [n[0] for n in nodes]
+    s = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n"
+    s += "1 %d %d %d\n%d 1 0 %d\n" % (len(nodes), min(tags), max(tags), dim, len(nodes))
+    s += "".join("%d\n" % t for t in tags)
+    s += "".join("%r %r %r\n" % (float(x), float(y), float(z)) for _, x, y, z in nodes)
+    etags = [e[0] for e in elements]
+    s += "$EndNodes\n$Elements\n1 %d %d %d\n%d 1 %d %d\n" % (
+        len(elements), min(etags), max(etags), dim, elements[0][1], len(elements))
+    s += "".join(" ".join(str(v) for v in [t] + nn) + "\n" for t, _, _, nn in elements)
+    return s + "$EndElements\n"
+
+
+def bin22_tagged(nodes, elements):
+    s = b"$MeshFormat\n2.2 1 8\n" + struct.pack("<i", 1) + b"\n$EndMeshFormat\n"
+    s += b"$Nodes\n%d\n" % len(nodes)
+    for t, x, y, z in nodes:
+        s += struct.pack("<iddd", t, x, y, z)
+    s += b"\n$EndNodes\n$Elements\n%d\n" % len(elements)
+    s += struct.pack("<iii", elements[0][1], len(elements), 2)
+    for t, _, _, nn in elements:
+        s += struct.pack("<iii", t, 1, 1) + struct.pack("<%di" % len(nn), *nn)
+    return s + b"\n$EndElements\n"
+
+
+def bin41_tagged(nodes, elements):
+    dim = {2: 2, 4: 3}[elements[0][1]]
+    tags = [n[0] for n in nodes]
+    s = b"$MeshFormat\n4.1 1 8\n" + struct.pack("<i", 1) + b"\n$EndMeshFormat\n$Nodes\n"
+    n = len(nodes)
+    s += struct.pack("<QQQQ", 1, n, min(tags), max(tags)) + struct.pack("<iiiQ", dim, 1, 0, n)
+    s += b"".join(struct.pack("<Q", t) for t in tags)
+    s += b"".join(struct.pack("<ddd", x, y, z) for _, x, y, z in nodes)
+    etags = [e[0] for e in elements]
+    s += b"\n$EndNodes\n$Elements\n"
+    s += struct.pack("<QQQQ", 1, len(elements), min(etags), max(etags))
+    s += struct.pack("<iiiQ", dim, 1, elements[0][1], len(elements))
+    for t, _, _, nn in elements:
+        s += struct.pack("<%dQ" % (1 + len(nn)), t, *nn)
+    return s + b"\n$EndElements\n"
+
+
+def tagged(name, nodes, elements, expected, variants=("22",)):
+    """The mesh retagged, as 2.2 ASCII and the other variants asked for."""
+    ns, es = retag(nodes, elements)
+    writers = {"22": msh22, "22b": bin22_tagged, "41": msh41_ascii, "41b": bin41_tagged}
+    for v in variants:
+        bad("tags%s-%s.msh" % (v, name), writers[v](ns, es), expected)
+
+
+ALL = ("22", "22b", "41", "41b")
+tagged("zero-area", SQ_NODES + [(5, 2, 2, 0)],
+       SQ_TRIS + [(3, 2, [1, 1], [1, 3, 5])], "element 29 has zero volume", ALL)
+tagged("repeated-vertex", SQ_NODES, [SQ_TRIS[0], (2, 2, [1, 1], [1, 3, 3])],
+       "element 23 repeats node 309")
+tagged("nonmanifold", SQ_NODES + [(5, 2, 0, 0)], SQ_TRIS + [(3, 2, [1, 1], [1, 5, 3])],
+       "non-manifold: facet of nodes (101, 309) shared by 3 cells", ALL)
+tagged("tangled", SQ_NODES + [(5, 0.9, 0.2, 0)], [SQ_TRIS[0], (2, 2, [1, 1], [1, 5, 3])],
+       "tangled: elements 17 and 23 overlap across facet of nodes (101, 309)")
+tagged("hanging-node", SQ_NODES + [(5, 1, 0.5, 0), (6, 2, 0, 0), (7, 2, 1, 0)],
+       SQ_TRIS + [(3, 2, [1, 1], [2, 6, 5]), (4, 2, [1, 1], [5, 6, 7]),
+                  (5, 2, [1, 1], [5, 7, 3])],
+       "non-conforming input: node 517 lies on facet of nodes (205, 309) (hanging node)", ALL)
+tagged("overlapping",
+       [(1, 0, 0, 0), (2, 2, 0, 0), (3, 0, 2, 0), (4, .5, .5, 0), (5, 3, .5, 0), (6, .5, 3, 0)],
+       [(1, 2, [1, 1], [1, 2, 3]), (2, 2, [1, 1], [4, 5, 6])],
+       "tangled: elements 23 and 17 overlap (the centroid of element 17 lies inside element 23)")
+# The fuzzer's wrong-overlap-2d.msh: a 3 x 3 grid of squares whose element
+# 5 had node 1 changed into node 9; only the angles around a node show it.
+GRID_NODES = [(1 + i + 4 * j, i / 3, j / 3, 0) for j in range(4) for i in range(4)]
+GRID_TRIS = [[1, 2, 6], [5, 1, 6], [5, 6, 10], [9, 5, 2], [9, 10, 14], [13, 9, 14],
+             [2, 3, 7], [6, 2, 7], [6, 7, 11], [10, 6, 11], [10, 11, 15], [14, 10, 15],
+             [3, 4, 8], [7, 3, 8], [7, 8, 12], [11, 7, 12], [11, 12, 16], [15, 11, 16]]
+tagged("fold", GRID_NODES, [(j + 2, 2, [7, 1], t) for j, t in enumerate(GRID_TRIS)],
+       "tangled: the 4 cells around node 205 form fans (a pinch) that overlap")
+# Coincident duplicate nodes (a mesh exported without merging them) are
+# reported as duplicates whatever check trips over them first: a hanging node
+# here (the square's two triangles do not share their diagonal) ...
+tagged("duplicates", SQ_NODES + [(5, 0, 0, 0), (6, 1, 1, 0)],
+       [SQ_TRIS[0], (2, 2, [1, 1], [5, 6, 4])],
+       "duplicate nodes: 101 and 517 are both at (0, 0)", ALL)
+# ... a zero-volume triangle (two of its nodes coincide) ...
+tagged("duplicates-flat", SQ_NODES + [(5, 1, 0, 0)],
+       SQ_TRIS + [(3, 2, [1, 1], [2, 5, 3])], "duplicate nodes: 205 and 517 are both at (1, 0)")
+# ... and tetrahedra.
+tagged("duplicates-tets", TET_NODES + [(6, 1, 0, 0), (7, 0, 1, 0), (8, 0, 0, 1)],
+       [TET_ELEMS[0], (2, 4, [1, 1], [6, 7, 8, 5])],
+       "duplicate nodes: 413 and 829 are both at (0, 0, 1) (and 2 more pairs)", ALL)
+tagged("nonmanifold-tets", TET_NODES + [(6, 2, 2, 2)],
+       TET_ELEMS + [(3, 4, [1, 1], [2, 3, 4, 6])],
+       "non-manifold: facet of nodes (205, 309, 413) shared by 3 cells", ("22", "41b"))
+tagged("zero-volume-tet", TET_NODES + [(6, 1, 1, 0)], [(1, 4, [1, 1], [1, 2, 3, 6])],
+       "element 17 has zero volume", ("22", "41b"))
+
+
 # --------------------------------------------------------------------- VTU
 
 def vtu(points, conn, offsets, types, extra_piece="", points_xml=None, npoints=None,

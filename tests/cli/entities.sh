@@ -62,33 +62,38 @@ def same(a, b, what):
         sys.exit("%s: %s != %s" % (what, a, b))
 
 
-mesh, dim = sys.argv[1], int(sys.argv[2])
-src, base = meshio.read(sys.argv[3]), groups(sys.argv[3])[1]
-for name in (mesh + ".vtu", mesh + ".msh", mesh + "-back.vtu"):
-    m, g = groups(name)
-    types = {b.type for b in m.cells}
-    if not set(BLOCKS[dim]) <= types:
-        sys.exit("%s: cell blocks %s, expected %s" % (name, types, BLOCKS[dim]))
-    if set(m.field_data) != NAMES:
-        sys.exit("%s: field_data %s" % (name, sorted(m.field_data)))
-    same(g, base, name)
-# meshio's conversions: .vtu -> XDMF -> .vtu, and .vtu -> Gmsh 2.2 (names kept).
-# (meshio 5.0 cannot read back an XDMF mixed topology holding vertex cells,
-# KeyError 0 in translate_mixed_cells: the 2D mesh with its tagged point
-# goes through Gmsh 2.2 only.)
-m = meshio.read(mesh + ".vtu")
-if dim == 3:
-    meshio.write(mesh + ".xdmf", m)
-    meshio.write(mesh + "-xdmf.vtu", meshio.read(mesh + ".xdmf"))
-    same(groups(mesh + "-xdmf.vtu")[1], base, "vtu -> xdmf -> vtu")
-keep = {"gmsh:physical", "gmsh:geometrical"}
-m.cell_data = {k: v for k, v in m.cell_data.items() if k in keep}
-m.point_data = {}
-meshio.write(mesh + "-22.msh", m, file_format="gmsh22", binary=False)
-m22, g22 = groups(mesh + "-22.msh")
-same(g22, base, "vtu -> gmsh22")
-if set(m22.field_data) != NAMES:
-    sys.exit("gmsh22: field_data %s" % sorted(m22.field_data))
+def main():
+    mesh, dim = sys.argv[1], int(sys.argv[2])
+    src, base = meshio.read(sys.argv[3]), groups(sys.argv[3])[1]
+    for name in (mesh + ".vtu", mesh + ".msh", mesh + "-back.vtu"):
+        m, g = groups(name)
+        types = {b.type for b in m.cells}
+        if not set(BLOCKS[dim]) <= types:
+            sys.exit("%s: cell blocks %s, expected %s" % (name, types, BLOCKS[dim]))
+        if set(m.field_data) != NAMES:
+            sys.exit("%s: field_data %s" % (name, sorted(m.field_data)))
+        same(g, base, name)
+    # meshio's conversions: .vtu -> XDMF -> .vtu, and .vtu -> Gmsh 2.2 (names kept).
+    # (meshio 5.0 cannot read back an XDMF mixed topology holding vertex cells,
+    # KeyError 0 in translate_mixed_cells: the 2D mesh with its tagged point
+    # goes through Gmsh 2.2 only.)
+    m = meshio.read(mesh + ".vtu")
+    if dim == 3:
+        meshio.write(mesh + ".xdmf", m)
+        meshio.write(mesh + "-xdmf.vtu", meshio.read(mesh + ".xdmf"))
+        same(groups(mesh + "-xdmf.vtu")[1], base, "vtu -> xdmf -> vtu")
+    keep = {"gmsh:physical", "gmsh:geometrical"}
+    m.cell_data = {k: v for k, v in m.cell_data.items() if k in keep}
+    m.point_data = {}
+    meshio.write(mesh + "-22.msh", m, file_format="gmsh22", binary=False)
+    m22, g22 = groups(mesh + "-22.msh")
+    same(g22, base, "vtu -> gmsh22")
+    if set(m22.field_data) != NAMES:
+        sys.exit("gmsh22: field_data %s" % sorted(m22.field_data))
+
+
+if __name__ == "__main__":
+    main()
 PY
 for mesh in box square; do
   dim=3
@@ -104,4 +109,41 @@ for mesh in box square; do
   done
   grep -q "physical name: walls" <("$BISECT" info $mesh-22.msh) || fail "$mesh-22.msh: names lost"
 done
-echo "entities: box and square groups kept through refine, coarsen, meshio's XDMF and Gmsh 2.2"
+
+# The whole workflow: Gmsh file -> refine -> meshio's XDMF -> refine again.
+# The groups come through by tag (per group, the same total measure as the
+# input's); the names do not: meshio 5.0 writes field_data neither to XDMF
+# nor to .vtu (both writers leave it out; README "Files"). The workaround
+# the README gives, names taken from bisect's .vtu and the XDMF mesh written
+# as Gmsh 2.2, brings them back. Should meshio start keeping them, the first
+# check below fails and the README should say so.
+cat >xdmf.py <<'PY'
+import sys
+import meshio
+
+sys.path.insert(0, ".")
+from check import groups, same, NAMES  # noqa: E402
+
+base = groups(sys.argv[1])[1]
+refined = meshio.read("box.vtu")
+m = meshio.read("box.xdmf")
+meshio.write("box-xdmf-again.vtu", m)
+if m.field_data or meshio.read("box-xdmf-again.vtu").field_data:
+    sys.exit("meshio now keeps field_data through XDMF: update README and this test")
+m.field_data = refined.field_data  # the workaround
+meshio.write("box-xdmf-named.msh", m, file_format="gmsh22", binary=False)
+for name in sys.argv[2:]:
+    m, g = groups(name)
+    same(g, base, name)
+    want = NAMES if "named" in name else set()
+    if set(m.field_data) != want:
+        sys.exit("%s: field_data %s, expected %s" % (name, sorted(m.field_data), sorted(want)))
+PY
+/usr/bin/python3 xdmf.py "$ROOT/data/box-tagged.msh" || fail "box: XDMF workflow before refining"
+expect_exit 0 "$BISECT" refine box-xdmf-named.msh --region corner-box.json -n 1 -o box-named-again.vtu -q --check --quality-csv none
+# again-box-xdmf.vtu: refined from meshio's XDMF -> .vtu above.
+/usr/bin/python3 xdmf.py "$ROOT/data/box-tagged.msh" again-box-xdmf.vtu box-named-again.vtu ||
+  fail "box: groups or names after refine -> XDMF -> refine"
+grep -q "physical name: walls" <("$BISECT" info box-named-again.vtu) || fail "box-named-again.vtu: names lost"
+echo "entities: box and square groups kept through refine, coarsen, meshio's XDMF and Gmsh 2.2;"
+echo "entities: refine -> XDMF -> refine keeps the groups by tag, and the names with the README's workaround"

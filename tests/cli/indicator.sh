@@ -91,6 +91,38 @@ PY
   one_line_naming "cell 2: indicator value -1 is negative"
   [[ ! -e x.vtu ]] || fail "an error left x.vtu"
 done
+# A .msh input's errors name its element tags (here 17 and 23, nodes 101..).
+cat >tagged.msh <<'MSH'
+$MeshFormat
+2.2 0 8
+$EndMeshFormat
+$Nodes
+4
+413 0 1 0
+309 1 1 0
+205 1 0 0
+101 0 0 0
+$EndNodes
+$Elements
+2
+23 2 2 1 1 101 309 413
+17 2 2 1 1 101 205 309
+$EndElements
+$ElementData
+1
+"eta"
+1
+0.0
+3
+0
+1
+2
+17 0.5
+23 -1
+$EndElementData
+MSH
+expect_exit 1 "$BISECT" refine tagged.msh --indicator eta --dorfler 0.5 -o x.vtu
+one_line_naming "tagged.msh: element 23: indicator value -1 is negative"
 # Usage errors.
 expect_exit 1 "$BISECT" refine in2.vtu --indicator eta -o x.vtu
 one_line_naming "exactly one of --above X, --top F, --dorfler THETA"

@@ -126,6 +126,18 @@ TEST_CASE("state: values out of range are rejected, naming the cell", "[state][i
       REQUIRE_THROWS_WITH(reload(m), Catch::Contains("in.vtu") && Catch::Contains("cell 5") &&
                                          Catch::Contains(kStateArray));
     }
+    // Read from a .msh: the cell is named by its element tag.
+    {
+      Mesh m = base;
+      array_named(m, kStateArray).values[5] = 3.5;
+      m.numbering.gmsh = true;
+      m.numbering.vertices = m.num_vertices();
+      m.numbering.cells = m.num_cells();
+      m.numbering.element_base = 1000;
+      prepare_input(m, "in.msh");
+      REQUIRE_THROWS_WITH(decode_state(m, "in.msh"),
+                          Catch::StartsWith("in.msh: element 1005: invalid bisection state"));
+    }
     // A Maubach tag 0 (stage bit set, tag bits 0).
     Mesh m = base;
     array_named(m, kStateArray).values[5] = 8;

@@ -297,6 +297,62 @@ TEST_CASE("check: a square bisected by hand with a hanging hypotenuse midpoint i
   CHECK(after.boundary_measure == Approx(4 + 2 * std::sqrt(2.0)));
 }
 
+TEST_CASE("names: messages name a .msh input's node and element tags, .vtu's indices",
+          "[check][io][2d]") {
+  // The square bisected by hand above, as a .msh with nodes tagged 101 +
+  // 104 v and elements 17 + 6 c, stored as lists (not an offset).
+  Mesh m = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 0.5, 0.5}, {0, 1, 4, 1, 2, 4, 0, 2, 3});
+  CHECK(prepare_error(m, "s.vtu") ==
+        "s.vtu: non-conforming input: vertex 4 lies on facet (0, 2) (hanging node)");
+  m.numbering.gmsh = true;
+  m.numbering.vertices = 5;
+  m.numbering.cells = 3;
+  m.numbering.node_tags = {101, 205, 309, 413, 517};
+  m.numbering.element_tags = {17, 23, 29};
+  CHECK(prepare_error(m, "s.msh") ==
+        "s.msh: non-conforming input: node 517 lies on facet of nodes (101, 309) (hanging node)");
+  CHECK(check_conformity(m).failure == "node 517 lies on facet of nodes (101, 309) (hanging node)");
+  SECTION("tags that run from an offset are stored as the offset") {
+    m.numbering.node_tags.clear();
+    m.numbering.node_base = 1000;
+    CHECK(prepare_error(m, "s.msh") ==
+          "s.msh: non-conforming input: node 1004 lies on facet of nodes (1000, 1002) (hanging "
+          "node)");
+  }
+  SECTION("a numbering not sized for the mesh is not used") {
+    m.numbering.cells = 4;
+    CHECK(prepare_error(m, "s.msh") ==
+          "s.msh: non-conforming input: vertex 4 lies on facet (0, 2) (hanging node)");
+  }
+  SECTION("cells by element tag") {
+    m.cells[1] = 4; // cell 0 repeats vertex 4
+    CHECK(prepare_error(m, "s.msh") == "s.msh: element 17 repeats node 517");
+  }
+}
+
+TEST_CASE("names: refinement drops the file's numbering", "[check][2d]") {
+  Mesh m = generate_kuhn(2, 1);
+  m.numbering.gmsh = true;
+  m.numbering.vertices = m.num_vertices();
+  m.numbering.cells = m.num_cells();
+  mark_mesh(m, Marking::Index);
+  refine_uniform(m);
+  CHECK_FALSE(m.numbering.gmsh);
+}
+
+TEST_CASE("duplicates: coincident vertices are reported as such, whichever check fails first",
+          "[check][2d]") {
+  // A square whose two triangles do not share their diagonal (vertices 4, 5
+  // repeat 0 and 2): each check sees a hanging node.
+  Mesh m = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 0, 0, 1, 1}, {0, 1, 2, 4, 5, 3});
+  CHECK_THAT(prepare_error(m, "d.vtu"), StartsWith("d.vtu: duplicate vertices: 0 and 4 are both "
+                                                   "at (0, 0) (and 1 more pairs)"));
+  // A flat triangle made of two coincident vertices: zero volume first.
+  Mesh flat = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 1, 0}, {0, 1, 2, 0, 2, 3, 1, 4, 2});
+  CHECK_THAT(prepare_error(flat, "f.vtu"),
+             StartsWith("f.vtu: duplicate vertices: 1 and 4 are both at (1, 0)"));
+}
+
 TEST_CASE("check: hanging vertices that are not edge midpoints are caught too", "[check][2d][3d]") {
   SECTION("2D: the square split at a third of its diagonal") {
     Mesh m = make_mesh(2, {0, 0, 1, 0, 1, 1, 0, 1, 1.0 / 3, 1.0 / 3}, {0, 1, 4, 1, 2, 4, 0, 2, 3});
