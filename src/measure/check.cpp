@@ -946,192 +946,361 @@ std::string find_duplicate_vertices(const Mesh &mesh) {
 }
 
 // Cells overlapping without sharing a facet (which the facet pass cannot see):
-// in a valid mesh the centroid of a cell lies in no other cell. Centroids go
-// into a uniform grid of half the mean cell extent, stored sparsely as
-// (grid cell key, cell) pairs sorted by key; each cell tests the centroids in
-// the grid cells its bounding box covers. Not a proof of validity (two thin
-// crossing cells may keep their centroids apart), but exact in what it
-// reports.
+// in a valid mesh the centroid of a cell lies in no other cell. Each cell
+// tests the centroids in its bounding box; the first cell (by index) with a
+// centroid strictly inside is reported, with the smallest such centroid's
+// cell. Not a proof of validity (two thin crossing cells may keep their
+// centroids apart), but exact in what it reports. A cell whose box covers
+// more than 4096 * 2^Dim cells of a grid of half the mean cell extent (a
+// huge cell among small ones) is skipped.
 //
-// Linear time for meshes of bounded grading: a grid row (the grid cells of
-// one (idx[1], .., idx[Dim-1])) is one range of the sorted pairs, found in a
-// small hash table of the rows (a binary search per row was half of `bisect
-// info`'s time on a 2M-tet file; a dense grid does not fit graded meshes,
-// whose small cells fill a small part of the box). Cells are visited in file
-// order, which keeps their vertices' reads local (visiting them in grid
-// order made every cell's first read a cache miss).
+// Linear-time range search on a Z-order (Morton) curve, which adapts to
+// graded meshes by itself (a uniform grid of one size did not: big cells
+// covered many of its cells, small ones crowded into few): the centroids'
+// coordinates are quantized to 64 / Dim bits each and interleaved into one
+// key, and the centroids are sorted by key (counting sort on the top bits,
+// then each bucket in the cache). Every point of a box has its key between
+// the keys of the box's corners, and runs of keys outside the box are
+// skipped with BIGMIN (Tropf and Herzog, "Multidimensional range search in
+// dynamically balanced trees", 1981): the smallest key past a given one
+// that lies in the box. Cells are visited in key order, so that the keys,
+// centroids and vertices a cell reads are mostly those its predecessor read.
+// The visit is split into pieces fixed by the mesh, each keeping its
+// smallest finding, so the result is the same for every thread count.
+template <int Dim> struct ZOrder {
+  static constexpr int kBits = 64 / Dim; // per coordinate
+  static constexpr int kKeyBits = kBits * Dim;
+  using Key = std::uint64_t;
+
+  // spread[b]: the 8 bits of b moved to bits 0, Dim, 2 Dim, ...
+  std::array<Key, 256> spread{};
+  std::array<Key, Dim> axis{}; // the key bits of each coordinate
+
+  ZOrder() {
+    for (int b = 0; b < 256; ++b)
+      for (int i = 0; i < 8; ++i)
+        if (b >> i & 1)
+          spread[std::size_t(b)] |= Key(1) << (i * Dim);
+    for (int d = 0; d < Dim; ++d)
+      for (int i = 0; i < kBits; ++i)
+        axis[std::size_t(d)] |= Key(1) << (i * Dim + d);
+  }
+
+  Key key(const std::uint32_t *q) const {
+    Key k = 0;
+    for (int d = 0; d < Dim; ++d)
+      for (int j = 0; j * 8 < kBits; ++j)
+        k |= spread[(q[d] >> (8 * j)) & 255u] << (8 * j * Dim + d);
+    return k;
+  }
+
+  // Whether key k lies in the box of corner keys lo, hi: coordinate by
+  // coordinate, the masked keys compare as the coordinates do.
+  bool inside(Key k, Key lo, Key hi) const {
+    bool in = true; // without branches: the outcome is hard to predict
+    for (int d = 0; d < Dim; ++d) {
+      const Key m = axis[std::size_t(d)];
+      in &= ((k & m) >= (lo & m)) & ((k & m) <= (hi & m));
+    }
+    return in;
+  }
+
+  // BIGMIN: the smallest key greater than z inside the box of corner keys
+  // lo <= z <= hi, z outside the box; ~0 when there is none.
+  Key next_inside(Key z, Key lo, Key hi) const {
+    Key best = ~Key(0);
+    const Key differ = lo ^ hi;
+    if (!differ)
+      return best;
+    for (int b = 63 - __builtin_clzll(differ); b >= 0; --b) {
+      const Key bit = Key(1) << b;
+      const Key below = axis[std::size_t(b % Dim)] & (bit - 1); // same coordinate, lower bits
+      const int case_ = int((z & bit) != 0) << 2 | int((lo & bit) != 0) << 1 | int((hi & bit) != 0);
+      switch (case_) {
+      case 0b001: // z's side is the low half: the box's high half starts after z
+        best = (lo | bit) & ~below;
+        hi = (hi & ~bit) | below;
+        break;
+      case 0b011: // the whole box is above z
+        return lo;
+      case 0b100: // the whole box is below z
+        return best;
+      case 0b101: // z in the high half: only the box's high half can follow
+        lo = (lo | bit) & ~below;
+        break;
+      default: // 000, 111: z in the box's one half; 010, 110 cannot happen
+        break;
+      }
+    }
+    return best;
+  }
+};
+
+// Sorts `keys` (with `ids` alongside) by key: a counting sort on the top 16
+// bits, then each bucket on its own (in the cache), buckets in parallel.
+inline void sort_by_key(std::vector<std::uint64_t> &keys, std::vector<CellId> &ids, int key_bits) {
+  const std::size_t n = keys.size();
+  const int shift = std::max(0, key_bits - 16);
+  const std::size_t buckets = (std::size_t(1) << std::min(key_bits, 16)) + 1;
+  std::vector<std::size_t> start(buckets + 1, 0);
+  for (std::uint64_t k : keys)
+    ++start[(k >> shift) + 1];
+  for (std::size_t b = 1; b <= buckets; ++b)
+    start[b] += start[b - 1];
+  std::vector<std::pair<std::uint64_t, CellId>,
+              UninitialisedAllocator<std::pair<std::uint64_t, CellId>>>
+      sorted(n);
+  {
+    std::vector<std::size_t> cursor(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i)
+      sorted[cursor[keys[i] >> shift]++] = {keys[i], ids[i]};
+  }
+  const int workers = int(std::clamp<std::size_t>(n >> 16, 1, std::size_t(threads())));
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 64)
+  for (std::size_t b = 0; b < buckets; ++b) {
+    std::sort(sorted.begin() + std::ptrdiff_t(start[b]),
+              sorted.begin() + std::ptrdiff_t(start[b + 1]));
+    for (std::size_t i = start[b]; i < start[b + 1]; ++i) {
+      keys[i] = sorted[i].first;
+      ids[i] = sorted[i].second;
+    }
+  }
+}
+
 template <int Dim> std::string find_overlap(const Mesh &mesh) {
   constexpr int N = Dim + 1;
+  using Z = ZOrder<Dim>;
+  using Key = typename Z::Key;
   const std::size_t nc = mesh.num_cells();
   if (nc < 2)
     return {};
-  std::vector<double> centroid(nc * Dim, 0.0);
+  // Blocks of cells fixed by the mesh; sums and findings are combined in
+  // block order.
+  constexpr std::size_t kBlock = std::size_t(1) << 13;
+  const std::size_t blocks = (nc + kBlock - 1) / kBlock;
+  const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
+
+  // The centroids, the bounding box of the cells and their mean extent.
+  std::vector<double, UninitialisedAllocator<double>> centroid(nc * Dim);
+  std::vector<std::array<double, 2 * Dim + 1>> block_box(blocks); // lo, hi, sum of extents
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
+  for (std::size_t k = 0; k < blocks; ++k) {
+    double pts[N * Dim];
+    auto &box = block_box[k];
+    std::fill(box.begin(), box.begin() + Dim, 1e300);
+    std::fill(box.begin() + Dim, box.begin() + 2 * Dim, -1e300);
+    double h = 0;
+    for (std::size_t c = k * kBlock; c < std::min(nc, (k + 1) * kBlock); ++c) {
+      gather<Dim>(mesh, mesh.cell(CellId(c)), N, pts);
+      double ext = 0;
+      for (int d = 0; d < Dim; ++d) {
+        double a = pts[d], b = pts[d], sum = 0;
+        for (int i = 0; i < N; ++i) {
+          a = std::min(a, pts[i * Dim + d]);
+          b = std::max(b, pts[i * Dim + d]);
+          sum += pts[i * Dim + d];
+        }
+        centroid[c * Dim + d] = sum / N;
+        box[d] = std::min(box[d], a);
+        box[Dim + d] = std::max(box[Dim + d], b);
+        ext = std::max(ext, b - a);
+      }
+      h += ext;
+    }
+    box[2 * Dim] = h;
+  }
   double lo[Dim], hi[Dim], h = 0;
   std::fill(lo, lo + Dim, 1e300);
   std::fill(hi, hi + Dim, -1e300);
-  double pts[N * Dim];
-  for (std::size_t c = 0; c < nc; ++c) {
-    gather<Dim>(mesh, mesh.cell(CellId(c)), N, pts);
-    double ext = 0;
+  for (const auto &box : block_box) {
     for (int d = 0; d < Dim; ++d) {
-      double a = pts[d], b = pts[d], sum = 0;
-      for (int k = 0; k < N; ++k) {
-        a = std::min(a, pts[k * Dim + d]);
-        b = std::max(b, pts[k * Dim + d]);
-        sum += pts[k * Dim + d];
-      }
-      centroid[c * Dim + d] = sum / N;
-      lo[d] = std::min(lo[d], a);
-      hi[d] = std::max(hi[d], b);
-      ext = std::max(ext, b - a);
+      lo[d] = std::min(lo[d], box[d]);
+      hi[d] = std::max(hi[d], box[Dim + d]);
     }
-    h += ext;
+    h += box[2 * Dim];
   }
   h /= double(nc);
   if (!(h > 0))
     return {};
-  constexpr int kBits = 64 / Dim;
-  // Grid cells of half the mean extent hold a few centroids each (a cell of
-  // the mean extent held ~40 in 3D, most of them outside the box tested).
-  constexpr int kSplit = 2;
+
+  // The skip rule's grid: half the mean extent.
+  constexpr int kGridBits = 64 / Dim;
   std::int64_t ncell[Dim];
   double size[Dim];
   for (int d = 0; d < Dim; ++d) {
-    size[d] = std::max(h / kSplit, (hi[d] - lo[d]) / double((std::uint64_t(1) << (kBits - 1)) - 1));
+    size[d] = std::max(h / 2, (hi[d] - lo[d]) / double((std::uint64_t(1) << (kGridBits - 1)) - 1));
     ncell[d] = std::int64_t((hi[d] - lo[d]) / size[d]) + 1;
   }
-  auto index = [&](double x, int d) {
+  auto grid_index = [&](double x, int d) {
     return std::int64_t(std::clamp(std::floor((x - lo[d]) / size[d]), 0.0, double(ncell[d] - 1)));
   };
-  auto key_of = [&](const std::int64_t *idx) {
-    std::uint64_t k = 0;
+
+  // Quantization for the keys: monotone in each coordinate, so a point in a
+  // box quantizes into the quantized box.
+  const Z z;
+  double scale[Dim];
+  const double top = double((std::uint64_t(1) << Z::kBits) - 1);
+  for (int d = 0; d < Dim; ++d)
+    scale[d] = hi[d] > lo[d] ? top / (hi[d] - lo[d]) : 0.0;
+  auto quantize = [&](const double *x, std::uint32_t *q) {
     for (int d = 0; d < Dim; ++d)
-      k |= std::uint64_t(idx[d]) << (kBits * d);
-    return k;
+      q[d] = std::uint32_t(std::clamp(std::floor((x[d] - lo[d]) * scale[d]), 0.0, top));
   };
-  std::vector<std::pair<std::uint64_t, CellId>> grid(nc);
-  for (std::size_t c = 0; c < nc; ++c) {
-    std::int64_t idx[Dim];
-    for (int d = 0; d < Dim; ++d)
-      idx[d] = index(centroid[c * Dim + d], d);
-    grid[c] = {key_of(idx), CellId(c)};
-  }
-  std::sort(grid.begin(), grid.end());
-  // The centroids in grid order, so that a grid cell's are read in sequence.
-  std::vector<double> ordered(nc * Dim);
-  for (std::size_t i = 0; i < nc; ++i)
-    std::copy_n(&centroid[std::size_t(grid[i].second) * Dim], Dim, &ordered[i * Dim]);
-  std::vector<double>().swap(centroid);
-  // The rows: open addressing from row key (key >> kBits) to the row's range
-  // [begin, end) of `grid`.
-  struct Row {
-    std::uint64_t key = ~std::uint64_t(0);
-    std::size_t begin = 0, end = 0;
-  };
-  std::size_t nrows = 0;
-  for (std::size_t i = 0; i < nc; ++i)
-    nrows += i == 0 || grid[i].first >> kBits != grid[i - 1].first >> kBits;
-  std::size_t rows_cap = 16; // at most half full, and small enough to stay in cache
-  while (rows_cap < 2 * nrows)
-    rows_cap *= 2;
-  std::vector<Row> rows(rows_cap);
-  auto slot_of = [&](std::uint64_t row) {
-    std::size_t s = std::size_t((row * 0x9E3779B97F4A7C15ull) >> 20) & (rows_cap - 1);
-    while (rows[s].key != row && rows[s].key != ~std::uint64_t(0))
-      s = (s + 1) & (rows_cap - 1);
-    return s;
-  };
-  for (std::size_t i = 0; i < nc;) {
-    const std::uint64_t row = grid[i].first >> kBits;
-    std::size_t j = i + 1;
-    while (j < nc && grid[j].first >> kBits == row)
-      ++j;
-    rows[slot_of(row)] = {row, i, j};
-    i = j;
-  }
-  // Barycentric coordinates in cell c: lambda[1..Dim] = inv (x - p0), with
-  // inv the inverse of the edge matrix (columns p_j - p0), made once per cell
-  // when a centroid first falls in its box; lambda[0] = 1 - the rest.
-  double inv[Dim * Dim];
-  int inv_state = 0; // 0 not made yet, 1 made, -1 the cell is singular
-  auto make_inverse = [&]() {
-    for (int j = 0; j < Dim; ++j) {
-      double g[Dim * Dim], b[Dim], col[Dim];
-      for (int r = 0; r < Dim; ++r) {
-        for (int k = 0; k < Dim; ++k)
-          g[r * Dim + k] = pts[(k + 1) * Dim + r] - pts[r];
-        b[r] = r == j ? 1.0 : 0.0;
+
+  // The centroids in key order.
+  std::vector<Key> keys(nc);
+  std::vector<CellId> ids(nc);
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
+  for (std::size_t k = 0; k < blocks; ++k)
+    for (std::size_t c = k * kBlock; c < std::min(nc, (k + 1) * kBlock); ++c) {
+      std::uint32_t q[Dim];
+      quantize(&centroid[c * Dim], q);
+      keys[c] = z.key(q);
+      ids[c] = CellId(c);
+    }
+  sort_by_key(keys, ids, Z::kKeyBits);
+  std::vector<double, UninitialisedAllocator<double>> ordered(nc * Dim);
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
+  for (std::size_t k = 0; k < blocks; ++k)
+    for (std::size_t i = k * kBlock; i < std::min(nc, (k + 1) * kBlock); ++i)
+      std::copy_n(&centroid[std::size_t(ids[i]) * Dim], Dim, &ordered[i * Dim]);
+  decltype(centroid)().swap(centroid);
+
+  // Each block of the key order: its smallest (cell, other cell) finding.
+  constexpr std::uint64_t kNone = ~std::uint64_t(0);
+  std::vector<std::uint64_t> found(blocks, kNone);
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
+  for (std::size_t k = 0; k < blocks; ++k) {
+    double pts[N * Dim], inv[Dim * Dim];
+    // Barycentric coordinates in the cell: lambda[1..Dim] = inv (x - p0),
+    // with inv the inverse of the edge matrix (columns p_j - p0), made once
+    // per cell when a centroid first falls in its box; lambda[0] = 1 - the
+    // rest.
+    auto make_inverse = [&]() {
+      for (int j = 0; j < Dim; ++j) {
+        double g[Dim * Dim], b[Dim], col[Dim];
+        for (int r = 0; r < Dim; ++r) {
+          for (int e = 0; e < Dim; ++e)
+            g[r * Dim + e] = pts[(e + 1) * Dim + r] - pts[r];
+          b[r] = r == j ? 1.0 : 0.0;
+        }
+        if (!small_solve(g, b, Dim, col))
+          return false;
+        for (int r = 0; r < Dim; ++r)
+          inv[r * Dim + j] = col[r];
       }
-      if (!small_solve(g, b, Dim, col))
-        return false;
-      for (int r = 0; r < Dim; ++r)
-        inv[r * Dim + j] = col[r];
-    }
-    return true;
-  };
-  for (std::size_t c = 0; c < nc; ++c) {
-    gather<Dim>(mesh, mesh.cell(CellId(c)), N, pts);
-    inv_state = 0;
-    std::int64_t ilo[Dim], ihi[Dim], idx[Dim];
-    double cover = 1, blo[Dim], bhi[Dim];
-    for (int d = 0; d < Dim; ++d) {
-      double a = pts[d], b = pts[d];
-      for (int k = 1; k < N; ++k)
-        a = std::min(a, pts[k * Dim + d]), b = std::max(b, pts[k * Dim + d]);
-      blo[d] = a;
-      bhi[d] = b;
-      ilo[d] = index(a, d);
-      ihi[d] = index(b, d);
-      cover *= double(ihi[d] - ilo[d] + 1);
-    }
-    if (cover > (4096 << Dim))
-      continue; // a huge cell among small ones: skipped, not worth the scan
-    std::copy(ilo, ilo + Dim, idx);
-    for (;;) {
-      // idx[0] fills the low bits of the key, so the grid cells ilo[0]..ihi[0]
-      // of one row are one key range within the row.
-      idx[0] = ilo[0];
-      const std::uint64_t first = key_of(idx);
-      idx[0] = ihi[0];
-      const std::uint64_t last = key_of(idx);
-      const Row &row = rows[slot_of(first >> kBits)];
-      auto it = grid.begin() + std::ptrdiff_t(row.begin);
-      const auto end = grid.begin() + std::ptrdiff_t(row.end);
-      if (row.end - row.begin > 8)
-        it = std::lower_bound(it, end, std::make_pair(first, CellId(0)));
-      for (; it != end && it->first <= last; ++it) {
-        if (it->first < first)
+      return true;
+    };
+    std::uint64_t best = kNone;
+    std::vector<std::uint32_t> candidates(64);
+    for (std::size_t i = k * kBlock; i < std::min(nc, (k + 1) * kBlock); ++i) {
+      const CellId c = ids[i];
+      // The cells ahead in key order are far apart in the file: fetch
+      // their vertex ids, then their vertices, before they are needed.
+      if (i + 16 < nc)
+        __builtin_prefetch(mesh.cell(ids[i + 16]));
+      if (i + 8 < nc)
+        for (int j = 0; j < N; ++j)
+          __builtin_prefetch(mesh.point(mesh.cell(ids[i + 8])[j]));
+      if (best != kNone && c > CellId(best >> 32))
+        continue; // cannot beat this block's finding
+      gather<Dim>(mesh, mesh.cell(c), N, pts);
+      double blo[Dim], bhi[Dim], cover = 1;
+      for (int d = 0; d < Dim; ++d) {
+        double a = pts[d], b = pts[d];
+        for (int j = 1; j < N; ++j)
+          a = std::min(a, pts[j * Dim + d]), b = std::max(b, pts[j * Dim + d]);
+        blo[d] = a;
+        bhi[d] = b;
+        cover *= double(grid_index(b, d) - grid_index(a, d) + 1);
+      }
+      if (cover > (4096 << Dim))
+        continue; // a huge cell among small ones: skipped, not worth the scan
+      std::uint32_t qlo[Dim], qhi[Dim];
+      quantize(blo, qlo);
+      quantize(bhi, qhi);
+      const Key zlo = z.key(qlo), zhi = z.key(qhi);
+      // The first key >= zlo, searched back from the cell's own (in the box).
+      std::size_t at = i;
+      for (std::size_t step = 1; at > 0; step *= 2) {
+        const std::size_t to = at >= step ? at - step : 0;
+        if (keys[to] < zlo) { // the first is in (to, at]
+          at = std::size_t(std::lower_bound(keys.begin() + std::ptrdiff_t(to + 1),
+                                            keys.begin() + std::ptrdiff_t(at), zlo) -
+                           keys.begin());
+          break;
+        }
+        at = to;
+      }
+      // Keys in chunks of kRun, tested without branches; a chunk with none
+      // in the box is a run outside it, jumped over with BIGMIN.
+      constexpr std::size_t kRun = 16;
+      std::size_t hits = 0;
+      while (at < nc) {
+        const std::size_t end = std::min(nc, at + kRun);
+        bool any = false;
+        for (std::size_t j = at; j < end; ++j) {
+          const bool in = z.inside(keys[j], zlo, zhi);
+          if (hits == candidates.size())
+            candidates.resize(2 * hits + kRun);
+          candidates[hits] = std::uint32_t(j);
+          hits += in;
+          any |= in;
+        }
+        const Key last = keys[end - 1];
+        at = end;
+        if (last > zhi)
+          break;
+        if (any)
           continue;
-        const double *x = &ordered[std::size_t(it - grid.begin()) * Dim];
-        bool inside = true;
+        // A run of keys outside the box: jump to the next inside.
+        const Key next = z.next_inside(last, zlo, zhi);
+        if (next == ~Key(0) || next > zhi)
+          break;
+        std::size_t from = at, span = 1;
+        while (from + span < nc && keys[from + span] < next)
+          from += span, span *= 2;
+        at = std::size_t(
+            std::lower_bound(keys.begin() + std::ptrdiff_t(from),
+                             keys.begin() + std::ptrdiff_t(std::min(nc, from + span + 1)), next) -
+            keys.begin());
+      }
+      int inv_state = 0; // 0 not made yet, 1 made, -1 the cell is singular
+      CellId other = CellId(-1);
+      for (std::size_t h = 0; h < hits; ++h) {
+        const std::size_t j = candidates[h];
+        const double *x = &ordered[j * Dim];
+        const CellId o = ids[j];
+        bool inside = o != c && o < other;
         for (int d = 0; d < Dim && inside; ++d) // outside the cell's box: not inside it
           inside = x[d] >= blo[d] && x[d] <= bhi[d];
-        const CellId o = it->second;
-        if (!inside || o == c)
+        if (!inside)
           continue;
         if (inv_state == 0)
           inv_state = make_inverse() ? 1 : -1;
         inside = inv_state == 1; // nothing is inside a singular cell
         double rest = 1;
-        for (int j = 0; j < Dim && inside; ++j) {
+        for (int j2 = 0; j2 < Dim && inside; ++j2) {
           double lambda = 0;
           for (int e = 0; e < Dim; ++e)
-            lambda += inv[j * Dim + e] * (x[e] - pts[e]);
+            lambda += inv[j2 * Dim + e] * (x[e] - pts[e]);
           rest -= lambda;
           inside = lambda > 1e-9;
         }
         if (inside && rest > 1e-9)
-          return cell_pair_name(mesh, CellId(c), CellId(o)) + " overlap (the centroid of " +
-                 cell_name(mesh, CellId(o)) + " lies inside " + cell_name(mesh, CellId(c)) + ")";
+          other = o;
       }
-      int d = 1;
-      while (d < Dim && ++idx[d] > ihi[d])
-        idx[d] = ilo[d], ++d;
-      if (d == Dim)
-        break;
+      if (other != CellId(-1))
+        best = std::min(best, std::uint64_t(c) << 32 | other);
     }
+    found[k] = best;
   }
-  return {};
+  const std::uint64_t best = *std::min_element(found.begin(), found.end());
+  if (best == kNone)
+    return {};
+  const CellId c = CellId(best >> 32), o = CellId(best & 0xFFFFFFFFu);
+  return cell_pair_name(mesh, c, o) + " overlap (the centroid of " + cell_name(mesh, o) +
+         " lies inside " + cell_name(mesh, c) + ")";
 }
 
 // Local injectivity (the angle condition): around every codimension-2 face
@@ -1156,18 +1325,18 @@ struct AngleFinding {
 
 template <int Dim> class StarAngles {
 public:
-  explicit StarAngles(const Mesh &mesh) : mesh_(mesh) {}
+  explicit StarAngles(const Mesh &mesh) : mesh_(&mesh) {}
 
   // face: Dim - 1 vertex ids; extras[2 i], extras[2 i + 1]: the other two
   // vertices of cell i. True when the star of the face is tangled.
   bool tangled(const VertexId *face, const VertexId *extras, int n, AngleFinding &out) {
     constexpr int K = Dim - 1;
-    const double *f0 = mesh_.point(face[0]);
+    const double *f0 = mesh_->point(face[0]);
     int nb = 0; // orthonormal basis of the span of F - f0
     for (int i = 1; i < K; ++i) {
       double e[Dim];
       for (int d = 0; d < Dim; ++d)
-        e[d] = mesh_.point(face[i])[d] - f0[d];
+        e[d] = mesh_->point(face[i])[d] - f0[d];
       for (int j = 0; j < nb; ++j) {
         const double s = dot(e, basis_[j]);
         for (int d = 0; d < Dim; ++d)
@@ -1360,7 +1529,7 @@ private:
     return s;
   }
   void project(const double *f0, int nb, VertexId v, double *u) const {
-    const double *x = mesh_.point(v);
+    const double *x = mesh_->point(v);
     for (int d = 0; d < Dim; ++d)
       u[d] = x[d] - f0[d];
     for (int j = 0; j < nb; ++j) {
@@ -1381,7 +1550,7 @@ private:
     return std::atan2(std::sqrt(w2 * vv), uv);
   }
 
-  const Mesh &mesh_;
+  const Mesh *mesh_;
   double basis_[Dim > 2 ? Dim - 2 : 1][Dim];
   std::vector<double> angle_;
   std::vector<std::pair<VertexId, int>> entry_;
@@ -1410,13 +1579,38 @@ std::string angle_message(const std::string &face, const AngleFinding &f, int di
   return "tangled: the " + std::to_string(f.cells) + " cells around " + face + buf;
 }
 
-template <int Dim> std::string find_fold(const Mesh &mesh) {
-  constexpr int N = Dim + 1;
-  StarAngles<Dim> star(mesh);
-  AngleFinding f;
+// The face visitor of find_fold (3D, 4D): the star of each
+// codimension-2 face, until the first tangled one.
+template <int Dim> struct FoldVisitor {
+  static constexpr int N = Dim + 1;
+  static constexpr auto subsets = subsimplices<N, Dim - 1>();
+  static constexpr int M = int(subsets.size());
+  const Mesh *mesh;
+  StarAngles<Dim> star;
   std::vector<VertexId> extras;
-  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+  AngleFinding f;
+  std::string found;
+  explicit FoldVisitor(const Mesh &m) : mesh(&m), star(m) {}
+  void operator()(const std::array<VertexId, Dim - 1> &key, const std::uint32_t *refs, int count) {
+    if (!found.empty())
+      return;
+    extras.clear();
+    for (int i = 0; i < count; ++i) {
+      const VertexId *cell = mesh->cell(CellId(refs[i] / M));
+      const auto &in = subsets[refs[i] % M];
+      for (int k = 0; k < N; ++k)
+        if (std::find(in.begin(), in.end(), k) == in.end())
+          extras.push_back(cell[k]);
+    }
+    if (star.tangled(key.data(), extras.data(), count, f))
+      found = angle_message((Dim == 3 ? "edge " : "triangle ") + id_list(*mesh, key), f, Dim);
+  }
+};
+
+template <int Dim> std::string find_fold(const Mesh &mesh) {
   if constexpr (Dim == 2) {
+    constexpr int N = Dim + 1;
+    const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
     // The faces are the vertices: cells by vertex (counting sort).
     std::vector<std::size_t> start(nv + 1, 0);
     for (VertexId v : mesh.cells)
@@ -1433,33 +1627,39 @@ template <int Dim> std::string find_fold(const Mesh &mesh) {
         pairs[at + 1] = cell[(i + 2) % N];
       }
     }
-    for (std::size_t v = 0; v < nv; ++v) {
-      const int n = int(start[v + 1] - start[v]);
-      const VertexId face = VertexId(v);
-      if (n > 0 && star.tangled(&face, &pairs[2 * start[v]], n, f))
-        return angle_message(vertex_name(mesh, VertexId(v)), f, 2);
+    // Blocks of vertices by all threads; the first finding in block order.
+    constexpr std::size_t kBlock = std::size_t(1) << 12;
+    const std::size_t blocks = (nv + kBlock - 1) / kBlock;
+    std::vector<std::string> found(blocks);
+    const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
+#pragma omp parallel num_threads(workers)
+    {
+      StarAngles<Dim> star(mesh);
+      AngleFinding f;
+#pragma omp for schedule(dynamic, 1)
+      for (std::size_t k = 0; k < blocks; ++k)
+        for (std::size_t v = k * kBlock; v < std::min(nv, (k + 1) * kBlock); ++v) {
+          const int n = int(start[v + 1] - start[v]);
+          const VertexId face = VertexId(v);
+          if (n > 0 && star.tangled(&face, &pairs[2 * start[v]], n, f)) {
+            found[k] = angle_message(vertex_name(mesh, VertexId(v)), f, 2);
+            break;
+          }
+        }
     }
+    for (const std::string &s : found)
+      if (!s.empty())
+        return s;
     return {};
   } else {
-    static constexpr auto subsets = subsimplices<N, Dim - 1>();
-    constexpr int M = int(subsets.size());
-    std::string found;
-    for_each_subsimplex<Dim, Dim - 1>(
-        mesh, [&](const std::array<VertexId, Dim - 1> &key, const std::uint32_t *refs, int count) {
-          if (!found.empty())
-            return;
-          extras.clear();
-          for (int i = 0; i < count; ++i) {
-            const VertexId *cell = mesh.cell(CellId(refs[i] / M));
-            const auto &in = subsets[refs[i] % M];
-            for (int k = 0; k < N; ++k)
-              if (std::find(in.begin(), in.end(), k) == in.end())
-                extras.push_back(cell[k]);
-          }
-          if (star.tangled(key.data(), extras.data(), count, f))
-            found = angle_message((Dim == 3 ? "edge " : "triangle ") + id_list(mesh, key), f, Dim);
-        });
-    return found;
+    // The faces' stars in blocks of the walk, by all threads; the first
+    // finding in block order (key order), as one walk in one thread.
+    std::vector<FoldVisitor<Dim>> parts;
+    for_each_subsimplex_blocks<Dim, Dim - 1>(mesh, FoldVisitor<Dim>(mesh), parts);
+    for (const FoldVisitor<Dim> &part : parts)
+      if (!part.found.empty())
+        return part.found;
+    return {};
   }
 }
 

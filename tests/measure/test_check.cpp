@@ -589,3 +589,164 @@ TEST_CASE("checks: the same volumes, measures, verdicts and messages for 1, 2 an
   }
   CHECK(std::abs(inv[0].volume - original.volume) < 1e-12 * original.volume);
 }
+
+namespace {
+
+std::vector<double> centroid_of(const Mesh &m, CellId c) {
+  std::vector<double> x(std::size_t(m.dim), 0.0);
+  for (int i = 0; i <= m.dim; ++i)
+    for (int d = 0; d < m.dim; ++d)
+      x[std::size_t(d)] += m.point(m.cell(c)[i])[d] / (m.dim + 1);
+  return x;
+}
+
+// Whether x lies strictly inside cell c (every barycentric coordinate above
+// 1e-9), by elimination on the edge matrix: a second, independent solver.
+bool strictly_inside(const Mesh &m, CellId c, const std::vector<double> &x) {
+  const int d = m.dim, w = d + 1;
+  std::vector<double> a(std::size_t(d * w));
+  const double *p0 = m.point(m.cell(c)[0]);
+  for (int r = 0; r < d; ++r) {
+    for (int j = 0; j < d; ++j)
+      a[std::size_t(r * w + j)] = m.point(m.cell(c)[j + 1])[r] - p0[r];
+    a[std::size_t(r * w + d)] = x[std::size_t(r)] - p0[r];
+  }
+  auto at = [&](int r, int j) -> double & { return a[std::size_t(r * w + j)]; };
+  for (int k = 0; k < d; ++k) {
+    int p = k;
+    for (int i = k + 1; i < d; ++i)
+      if (std::abs(at(i, k)) > std::abs(at(p, k)))
+        p = i;
+    for (int j = 0; j <= d; ++j)
+      std::swap(at(k, j), at(p, j));
+    for (int i = k + 1; i < d; ++i) {
+      const double f = at(i, k) / at(k, k);
+      for (int j = k; j <= d; ++j)
+        at(i, j) -= f * at(k, j);
+    }
+  }
+  std::vector<double> lambda(static_cast<std::size_t>(d));
+  double rest = 1;
+  for (int k = d - 1; k >= 0; --k) {
+    double s = at(k, d);
+    for (int j = k + 1; j < d; ++j)
+      s -= at(k, j) * lambda[std::size_t(j)];
+    lambda[std::size_t(k)] = s / at(k, k);
+  }
+  for (double l : lambda) {
+    if (!(l > 1e-9))
+      return false;
+    rest -= l;
+  }
+  return rest > 1e-9;
+}
+
+// A graded mesh: the Kuhn mesh refined once, then twice more near x = 0.
+Mesh graded_kuhn(int dim, int k) {
+  Mesh m = generate_kuhn(dim, k);
+  mark_mesh(m, Marking::Longest);
+  refine_uniform(m);
+  for (int round = 0; round < 2; ++round) {
+    std::vector<CellId> near;
+    for (std::size_t c = 0; c < m.num_cells(); ++c)
+      if (m.point(m.cell(CellId(c))[0])[0] < 0.3)
+        near.push_back(CellId(c));
+    refine(m, near);
+  }
+  return m;
+}
+
+// Appends a copy of the cell nearest `where` (by centroid), scaled by
+// `scale` about its centroid, on vertices of its own: it shares no facet
+// with the mesh. Returns the new cell.
+CellId add_scaled_copy(Mesh &m, const std::vector<double> &where, double scale) {
+  CellId model = 0;
+  double best = 1e300;
+  for (std::size_t c = 0; c < m.num_cells(); ++c) {
+    const std::vector<double> x = centroid_of(m, CellId(c));
+    double s = 0;
+    for (int d = 0; d < m.dim; ++d)
+      s +=
+          (x[std::size_t(d)] - where[std::size_t(d)]) * (x[std::size_t(d)] - where[std::size_t(d)]);
+    if (s < best)
+      best = s, model = CellId(c);
+  }
+  const std::vector<double> g = centroid_of(m, model);
+  std::vector<VertexId> cell;
+  for (int i = 0; i <= m.dim; ++i) {
+    std::vector<double> p(std::size_t(m.dim));
+    for (int d = 0; d < m.dim; ++d)
+      p[std::size_t(d)] =
+          g[std::size_t(d)] + scale * (m.point(m.cell(model)[i])[d] - g[std::size_t(d)]);
+    cell.push_back(add_vertex(m, p));
+  }
+  m.cells.insert(m.cells.end(), cell.begin(), cell.end());
+  return CellId(m.num_cells() - 1);
+}
+
+// prepare_input's message when the only cells overlapping others are
+// `extras`: the pair (cell, other) with the smallest cell, then the
+// smallest other, whose other's centroid lies strictly inside the cell.
+std::string expected_overlap(const Mesh &m, const std::vector<CellId> &extras,
+                             const std::string &path) {
+  std::pair<CellId, CellId> best{CellId(-1), CellId(-1)};
+  for (CellId e : extras) {
+    const std::vector<double> ge = centroid_of(m, e);
+    for (std::size_t c = 0; c < m.num_cells(); ++c) {
+      if (CellId(c) == e)
+        continue;
+      if (strictly_inside(m, CellId(c), ge))
+        best = std::min(best, {CellId(c), e});
+      if (strictly_inside(m, e, centroid_of(m, CellId(c))))
+        best = std::min(best, {e, CellId(c)});
+    }
+  }
+  if (best.first == CellId(-1))
+    return "no error";
+  const std::string a = std::to_string(best.first), b = std::to_string(best.second);
+  return path + ": tangled: cells " + a + " and " + b + " overlap (the centroid of cell " + b +
+         " lies inside cell " + a + ")";
+}
+
+} // namespace
+
+TEST_CASE("overlap: a cell laid over a graded mesh, sharing no facet with it, is found with the "
+          "smallest pair",
+          "[check][overlap][2d][3d][4d]") {
+  const int dim = GENERATE(2, 3, 4);
+  const double scale = GENERATE(0.3, 2.37);
+  Mesh m = graded_kuhn(dim, dim == 4 ? 2 : 4);
+  REQUIRE(prepare_error(m, "t.vtu") == "no error");
+  // In the fine part (x < 0.3) and in the coarse part.
+  for (double x : {0.21, 0.63}) {
+    Mesh bad = m;
+    std::vector<double> where(std::size_t(dim), 0.47);
+    where[0] = x;
+    const CellId extra = add_scaled_copy(bad, where, scale);
+    const std::string expected = expected_overlap(bad, {extra}, "t.vtu");
+    INFO("dim " << dim << ", scale " << scale << ", x " << x << ", " << bad.num_cells()
+                << " cells");
+    CHECK(expected != "no error");
+    CHECK(prepare_error(bad, "t.vtu") == expected);
+  }
+}
+
+TEST_CASE("overlap: the same finding for 1, 2 and 3 threads, the smallest pair of several",
+          "[check][overlap][threads][3d]") {
+  // Large enough for several blocks of the search (8,192 cells each) and two
+  // workers.
+  Mesh m = generate_kuhn(3, 8);
+  mark_mesh(m, Marking::Longest);
+  while (m.num_cells() < 90000)
+    refine_uniform(m);
+  const CellId a = add_scaled_copy(m, {0.7, 0.2, 0.4}, 2.37);
+  const CellId b = add_scaled_copy(m, {0.3, 0.6, 0.5}, 0.3);
+  const std::string expected = expected_overlap(m, {a, b}, "t.vtu");
+  REQUIRE(expected != "no error");
+  INFO(m.num_cells() << " cells");
+  for (int t : {1, 2, 3}) {
+    set_threads(t);
+    CHECK(prepare_error(m, "t.vtu") == expected);
+  }
+  set_threads(0);
+}
