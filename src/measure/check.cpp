@@ -436,25 +436,54 @@ bool small_solve(double *g, double *b, int n, double *x) {
   return true;
 }
 
-// (Dim-1)-measure of the facet with vertex rows p[0..Dim): sqrt(det Gram)/(Dim-1)!.
+// (Dim-1)-measure of the facet with vertex rows p[0..Dim): the product of the
+// edge vectors' orthogonalised lengths over (Dim-1)!, by modified Gram-Schmidt
+// taking the longest remaining vector first. The Gram determinant would square
+// the facet's condition number, and a facet of a cell stretched 200:1 then
+// loses six digits (fuzz finding check-failed-stretched-4d).
 template <int Dim> double facet_measure(const double *p) {
   constexpr int n = Dim - 1;
   double e[n][Dim];
-  for (int i = 0; i < n; ++i)
-    for (int d = 0; d < Dim; ++d)
+  double len2[n];
+  for (int i = 0; i < n; ++i) {
+    len2[i] = 0;
+    for (int d = 0; d < Dim; ++d) {
       e[i][d] = p[(i + 1) * Dim + d] - p[d];
-  double g[n * n];
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      double s = 0;
-      for (int d = 0; d < Dim; ++d)
-        s += e[i][d] * e[j][d];
-      g[i * n + j] = s;
+      len2[i] += e[i][d] * e[i][d];
     }
-  double fact = 1;
+  }
+  double measure = 1;
+  for (int k = 0; k < n; ++k) {
+    int q = k;
+    for (int i = k + 1; i < n; ++i)
+      if (len2[i] > len2[q])
+        q = i;
+    if (q != k) {
+      std::swap(e[k], e[q]);
+      std::swap(len2[k], len2[q]);
+    }
+    double norm2 = 0;
+    for (int d = 0; d < Dim; ++d)
+      norm2 += e[k][d] * e[k][d];
+    const double norm = std::sqrt(norm2);
+    if (!(norm > 0))
+      return 0;
+    measure *= norm;
+    for (int i = k + 1; i < n; ++i) {
+      double dot = 0;
+      for (int d = 0; d < Dim; ++d)
+        dot += e[i][d] * e[k][d];
+      const double f = dot / norm2;
+      len2[i] = 0;
+      for (int d = 0; d < Dim; ++d) {
+        e[i][d] -= f * e[k][d];
+        len2[i] += e[i][d] * e[i][d];
+      }
+    }
+  }
   for (int i = 2; i <= n; ++i)
-    fact *= i;
-  return std::sqrt(std::max(0.0, determinant(g, n))) / fact;
+    measure /= i;
+  return measure;
 }
 
 template <int Dim> double longest_squared_edge(const double *p) {
