@@ -13,6 +13,7 @@
 #include "core/dimension.hpp"
 #include "core/geometry.hpp"
 #include "core/names.hpp"
+#include "measure/check_testing.hpp"
 
 #include "bisect/measure.hpp"
 #include "bisect/threads.hpp"
@@ -86,7 +87,41 @@ template <int K> void sort_small(std::array<VertexId, K> &a) {
       std::swap(a[j], a[j - 1]);
 }
 
+// Sorts the N ids of a cell by a branch-free sorting network, carrying each
+// id's local index along; returns the parity of the permutation (0 even,
+// 1 odd): every exchange made is one transposition. Random ids made the
+// branches of an insertion sort a coin toss.
+template <int N>
+constexpr auto kNetwork = [] {
+  if constexpr (N == 3)
+    return std::array<std::pair<int, int>, 3>{{{0, 1}, {1, 2}, {0, 1}}};
+  else if constexpr (N == 4)
+    return std::array<std::pair<int, int>, 5>{{{0, 1}, {2, 3}, {0, 2}, {1, 3}, {1, 2}}};
+  else
+    return std::array<std::pair<int, int>, 9>{
+        {{0, 1}, {3, 4}, {2, 4}, {2, 3}, {0, 3}, {0, 2}, {1, 4}, {1, 3}, {1, 2}}};
+}();
+
+// keys[i] = cell's i-th smallest id << 3 | its local index.
+template <int N>
+[[gnu::always_inline]] inline int sort_cell(const VertexId *cell,
+                                            std::array<std::uint64_t, N> &keys) {
+  for (int i = 0; i < N; ++i)
+    keys[i] = std::uint64_t(cell[i]) << 3 | unsigned(i);
+  int parity = 0;
+  for (const auto &[a, b] : kNetwork<N>) {
+    const std::uint64_t x = keys[a], y = keys[b];
+    parity ^= int(y < x);
+    keys[a] = std::min(x, y);
+    keys[b] = std::max(x, y);
+  }
+  return parity;
+}
+
 constexpr std::size_t kChunkBytes = std::size_t(96) << 20;
+
+// See check_testing.hpp.
+bool g_sorted_final_walk = false;
 
 // An allocator whose resize() leaves new elements uninitialised (for trivial
 // types): the walk's buffer is written in full before it is read, and
@@ -188,9 +223,23 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
 #pragma omp parallel for num_threads(parts) schedule(static, 1)
     for (int t = 0; t < parts; ++t) {
       std::size_t *mine = counts.data() + std::size_t(t) * coarse;
-      for (std::size_t c = part_begin(t); c < part_begin(t + 1); ++c)
-        for (int m = 0; m < M; ++m)
-          ++mine[min_of(mesh.cell(CellId(c)), m) >> shift];
+      for (std::size_t c = part_begin(t); c < part_begin(t + 1); ++c) {
+        const VertexId *cell = mesh.cell(CellId(c));
+        if constexpr (K == Dim) {
+          // A facet's smallest id is the cell's smallest, except for the
+          // facet without it, whose smallest is the cell's second smallest.
+          VertexId first = std::min(cell[0], cell[1]), second = std::max(cell[0], cell[1]);
+          for (int i = 2; i <= Dim; ++i) {
+            second = std::min(second, std::max(first, cell[i]));
+            first = std::min(first, cell[i]);
+          }
+          mine[first >> shift] += Dim;
+          ++mine[second >> shift];
+        } else {
+          for (int m = 0; m < M; ++m)
+            ++mine[min_of(cell, m) >> shift];
+        }
+      }
     }
     start.assign(coarse + 1, 0);
     for (int t = 0; t < parts; ++t)
@@ -260,6 +309,87 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
     }
   }
 
+  // The final check's fast path (SideOnly, a visitor with interior_pairs):
+  // a coarse bucket's facets matched by hashing, in the cache, instead of
+  // the fine scatter and sorts. A stamp per slot marks the bucket that
+  // filled it, so the table is never cleared.
+  struct MatchSlot {
+    Packed ids;          // the packed facet without its side bit
+    std::uint32_t stamp; // the bucket that filled the slot (0: none yet)
+    std::uint16_t fine;  // the smallest id's place in the coarse bucket
+    std::uint8_t side;   // the first copy's side bit
+    std::uint8_t copies; // 1 or 2
+  };
+  struct MatchTable {
+    std::vector<MatchSlot> slots;
+    std::uint32_t stamp = 0;
+  };
+
+  // Matches the entries [lo, hi) of coarse bucket b. When every facet comes
+  // once, or twice with opposite sides, visits the single ones in key order
+  // (each with count 1, as the sorted walk would), tells the visitor how many
+  // pairs there were, and returns true. Otherwise visits nothing and returns
+  // false: the sorted walk then finds and names the first offending facet.
+  template <class Visit>
+  bool match_bucket(std::size_t b, std::size_t lo, std::size_t hi, const Buffer &buffer,
+                    const std::vector<std::uint16_t, UninitialisedAllocator<std::uint16_t>> &fine,
+                    MatchTable &table, std::vector<std::pair<std::uint16_t, Packed>> &singles,
+                    Visit &visit) const {
+    const std::size_t n = hi - lo;
+    std::size_t cap = 64;
+    while (cap < 2 * n)
+      cap *= 2;
+    if (table.slots.size() < cap || table.stamp == 0xFFFFFFFFu) {
+      table.slots.assign(std::max(cap, table.slots.size()), MatchSlot{0, 0, 0, 0, 0});
+      table.stamp = 0;
+    }
+    const std::uint32_t stamp = ++table.stamp;
+    // A table sized for this bucket: the low bits of the hash.
+    const std::size_t mask = cap - 1;
+    std::size_t pairs = 0;
+    for (std::size_t i = lo; i < hi; ++i) {
+      const Packed ids = buffer[i] >> 1;
+      const std::uint8_t side = std::uint8_t(buffer[i] & 1u);
+      std::uint64_t h =
+          (std::uint64_t(ids) ^ (std::uint64_t(fine[i]) << 47)) * 0x9E3779B97F4A7C15ull;
+      h ^= h >> 32;
+      for (std::size_t at = h & mask;; at = (at + 1) & mask) {
+        MatchSlot &slot = table.slots[at];
+        if (slot.stamp != stamp) {
+          slot = MatchSlot{ids, stamp, fine[i], side, 1};
+          break;
+        }
+        if (slot.ids == ids && slot.fine == fine[i]) {
+          if (slot.copies != 1 || slot.side == side)
+            return false; // a third copy, or two cells on one side
+          slot.copies = 2;
+          ++pairs;
+          break;
+        }
+      }
+    }
+    singles.clear();
+    for (std::size_t at = 0; at < cap; ++at) {
+      const MatchSlot &slot = table.slots[at];
+      if (slot.stamp == stamp && slot.copies == 1)
+        singles.emplace_back(slot.fine, Packed((slot.ids << 1) | slot.side));
+    }
+    std::sort(singles.begin(), singles.end());
+    std::array<VertexId, K> key;
+    std::uint32_t ref;
+    for (const auto &[f, packed] : singles) {
+      key[0] = VertexId((b << shift) + f);
+      const Packed rest = packed >> kRefBits;
+      for (int t = K - 1; t >= 1; --t)
+        key[t] =
+            VertexId((rest >> (kIdBits * (K - 1 - t))) & Packed(0xFFFFFFFFu >> (32 - kIdBits)));
+      ref = (packed & 1u) ? kSideBit : 0u;
+      visit(std::as_const(key), &ref, 1);
+    }
+    visit.interior_pairs(pairs);
+    return true;
+  }
+
   // Fills the chunk [b0, b1) of coarse buckets and visits it. visitor(k)
   // gives the visitor of block k, the coarse buckets [k * kBlock,
   // (k + 1) * kBlock); with Parallel the blocks are visited by several
@@ -287,6 +417,45 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
       std::array<VertexId, K> key;
       for (std::size_t c = part_begin(t); c < part_begin(t + 1); ++c) {
         const VertexId *cell = mesh.cell(CellId(c));
+        if constexpr (K == Dim && WithRefs) {
+          // Facets from the cell's sorted ids: facet k omits the k-th
+          // smallest, keeps the others in order, and its side follows from
+          // the sort's parity (see facet_side).
+          // Most cells have no facet in a chunk: the two smallest ids
+          // decide that, without the sort.
+          VertexId first = std::min(cell[0], cell[1]), second = std::max(cell[0], cell[1]);
+          for (int i = 2; i <= Dim; ++i) {
+            second = std::min(second, std::max(first, cell[i]));
+            first = std::min(first, cell[i]);
+          }
+          if (first >= hi_v || second < lo_v)
+            continue;
+          std::array<std::uint64_t, Dim + 1> keys;
+          const int parity = sort_cell<Dim + 1>(cell, keys);
+          std::array<VertexId, Dim + 1> ids;
+          for (int i = 0; i <= Dim; ++i)
+            ids[i] = VertexId(keys[i] >> 3);
+          const int sign = signs ? (*signs)[c] : 0;
+          for (int k = 0; k <= Dim; ++k) {
+            const VertexId low = k ? ids[0] : ids[1];
+            if (low < lo_v || low >= hi_v)
+              continue;
+            unsigned __int128 p = 0;
+            for (int i = 0, j = 0; i <= Dim; ++i)
+              if (i != k && j++ > 0)
+                p = (p << kIdBits) | ids[i];
+            const bool positive = (parity + Dim - k) % 2 ? sign < 0 : sign > 0;
+            if constexpr (SideOnly)
+              p = (p << 1) | unsigned(positive);
+            else
+              p = (p << 32) | (std::uint32_t(c * M + (keys[k] & 7u)) | (positive ? kSideBit : 0u));
+            const std::size_t at = cursor[(low >> shift) - b0]++;
+            buffer[at] = Packed(p);
+            if (shift)
+              fine[at] = std::uint16_t(low & mask);
+          }
+          continue;
+        }
         for (int m = 0; m < M; ++m) {
           const VertexId low = min_of(cell, m);
           if (low < lo_v || low >= hi_v)
@@ -306,6 +475,8 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
       std::vector<std::uint32_t> group;
       Buffer scratch;
       std::vector<std::size_t> count(mask + 2);
+      MatchTable table;
+      std::vector<std::pair<std::uint16_t, Packed>> singles;
 #pragma omp for schedule(dynamic, 1)
       for (std::size_t k = k0; k < k1; ++k) {
         auto &visit = visitor(k);
@@ -318,6 +489,10 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
                          buffer.begin() + std::ptrdiff_t(hi), group, visit);
             continue;
           }
+          if constexpr (requires { visit.interior_pairs(std::size_t()); })
+            if (!g_sorted_final_walk &&
+                match_bucket(b, lo, hi, buffer, fine, table, singles, visit))
+              continue;
           std::fill(count.begin(), count.end(), 0);
           for (std::size_t i = lo; i < hi; ++i)
             ++count[fine[i] + 1];
@@ -623,6 +798,8 @@ template <int Dim, bool SideOnly> struct FacetVisitor {
   const std::vector<std::int8_t> *signs;
   bool keep_boundary;
   FacetReport r;
+  // Interior facets matched without a visit (the final check's fast path).
+  void interior_pairs(std::size_t n) requires SideOnly { r.facets += n; }
   void operator()(const std::array<VertexId, Dim> &key, const std::uint32_t *refs, int count) {
     constexpr int M = Dim + 1;
     ++r.facets;
@@ -1892,3 +2069,9 @@ void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &prog
 }
 
 } // namespace bisect
+
+namespace bisect::testing {
+void use_sorted_final_walk(bool on) {
+  g_sorted_final_walk = on;
+}
+} // namespace bisect::testing

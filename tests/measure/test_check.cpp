@@ -6,6 +6,7 @@
 #include "bisect/measure.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/threads.hpp"
+#include "measure/check_testing.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -588,6 +589,62 @@ TEST_CASE("checks: the same volumes, measures, verdicts and messages for 1, 2 an
     CHECK(verdicts[i] == verdicts[0]);
   }
   CHECK(std::abs(inv[0].volume - original.volume) < 1e-12 * original.volume);
+}
+
+TEST_CASE("final check: matching facets by hashing gives the sorted walk's verdicts and messages",
+          "[check][threads][2d][3d][4d]") {
+  // Meshes of more than 1,024 vertices, so the walk has fine buckets and
+  // the hashing path runs; each defect in a copy of its own.
+  for (int dim : {2, 3, 4}) {
+    Mesh m = generate_kuhn(dim, dim == 2 ? 40 : dim == 3 ? 12 : 6);
+    mark_mesh(m, Marking::Index);
+    const Invariants original = measure_invariants(m, false);
+    while (m.num_cells() < 70000)
+      refine_uniform(m);
+    REQUIRE(m.num_vertices() > 4096);
+    const int n = dim + 1;
+    const std::size_t nc = m.num_cells();
+    std::vector<std::pair<std::string, Mesh>> cases;
+    cases.emplace_back("honest", m);
+    Mesh moved = m; // a vertex moved onto a neighbour's: fold and hanging node
+    moved.cells[std::size_t(n) * (nc / 2) + 1] = moved.cells[std::size_t(n) * (nc / 2 + 1) + 2];
+    cases.emplace_back("moved", std::move(moved));
+    Mesh twice = m; // a cell repeated: its facets in three cells, or two on one side
+    twice.cells.insert(twice.cells.end(), m.cells.begin() + std::ptrdiff_t(n) * 12345,
+                       m.cells.begin() + std::ptrdiff_t(n) * 12346);
+    cases.emplace_back("twice", std::move(twice));
+    Mesh holed = m; // a cell removed: a hole, the boundary grows
+    holed.cells.erase(holed.cells.begin() + std::ptrdiff_t(n) * 777,
+                      holed.cells.begin() + std::ptrdiff_t(n) * 778);
+    cases.emplace_back("holed", std::move(holed));
+    Mesh pushed = m; // a vertex pushed through its cell's opposite facet: inverted
+    {
+      const VertexId *c = m.cell(CellId(4242));
+      std::vector<double> x(m.point(c[0]), m.point(c[0]) + dim);
+      for (int i = 1; i <= dim; ++i)
+        for (int d = 0; d < dim; ++d)
+          x[std::size_t(d)] += 2.0 / dim * (m.point(c[i])[d] - m.point(c[0])[d]) * 1.5;
+      pushed.coords.insert(pushed.coords.end(), x.begin(), x.end());
+      pushed.cells[std::size_t(n) * 4242] = VertexId(m.num_vertices());
+    }
+    cases.emplace_back("pushed", std::move(pushed));
+    for (const auto &[what, mesh] : cases) {
+      INFO("dim " << dim << ", " << what);
+      std::vector<std::string> verdicts;
+      for (bool sorted : {false, true})
+        for (int t : {1, 2, 3}) {
+          testing::use_sorted_final_walk(sorted);
+          set_threads(t);
+          const CheckResult r = check_refined(mesh, original);
+          verdicts.push_back(r.ok ? "ok" : r.failure);
+        }
+      testing::use_sorted_final_walk(false);
+      set_threads(0);
+      CHECK((what == "honest") == (verdicts[0] == "ok"));
+      for (const std::string &v : verdicts)
+        CHECK(v == verdicts[0]);
+    }
+  }
 }
 
 namespace {
