@@ -546,13 +546,24 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
     }
   }
   const std::size_t ncell_ids = mesh.cells.size();
-  write_array<std::int64_t>(
-      w, compression, level, "connectivity", 1, ncell_ids + entity_ids, [&](std::size_t i) {
-        return i < ncell_ids ? std::int64_t(mesh.cells[i]) : entity_conn[i - ncell_ids];
-      });
-  write_array<std::int64_t>(w, compression, level, "offsets", 1, nc, [&](std::size_t c) {
-    return c < ncells ? std::int64_t((c + 1) * std::size_t(nvc)) : entity_offsets[c - ncells];
-  });
+  auto connectivity = [&](auto type) {
+    using T = decltype(type);
+    write_array<T>(
+        w, compression, level, "connectivity", 1, ncell_ids + entity_ids, [&](std::size_t i) {
+          return T(i < ncell_ids ? std::int64_t(mesh.cells[i]) : entity_conn[i - ncell_ids]);
+        });
+    write_array<T>(w, compression, level, "offsets", 1, nc, [&](std::size_t c) {
+      return T(c < ncells ? std::int64_t((c + 1) * std::size_t(nvc)) : entity_offsets[c - ncells]);
+    });
+  };
+  // Int32 ids and offsets when they fit (every mesh below 2^31 ids): half
+  // the bytes of the largest arrays to compress and write; VTK, ParaView and
+  // meshio read either.
+  if (ncell_ids + entity_ids <= std::size_t(std::numeric_limits<std::int32_t>::max()) &&
+      mesh.num_vertices() <= std::size_t(std::numeric_limits<std::int32_t>::max()))
+    connectivity(std::int32_t());
+  else
+    connectivity(std::int64_t());
   const std::uint8_t type = dim == 2 ? 5 : dim == 3 ? 10 : 2; // triangle, tetra, poly-vertex
   write_array<std::uint8_t>(w, compression, level, "types", 1, nc, [&](std::size_t c) {
     return c < ncells ? type : entity_types[c - ncells];
