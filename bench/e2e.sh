@@ -1,22 +1,29 @@
 #!/usr/bin/env bash
 # End-to-end benchmark: `bisect refine` as a user runs it (one process: read,
-# validate, select, refine, quality, write .vtu), per stage, from its --json.
-# Prints one JSON object per case on stdout, with the machine's load.
+# validate, select, refine, quality, final check, write .vtu), per stage,
+# from its --json. Prints one JSON object per case and thread count on
+# stdout, with the machine's load.
 #
-#   bash bench/e2e.sh                 # 3D ball 12 iterations, 4D hypercube 25
+#   bash bench/e2e.sh                 # 3D ball 12 iterations, 4D hypercube 25; 1 and all threads
 #   ITER3D=14 ITER4D=25 bash bench/e2e.sh
-#   BISECT=build/bisect OUT=/tmp/bench bash bench/e2e.sh
+#   BIG=1 bash bench/e2e.sh           # also issue 13's case: a 56,635-tet ball, 14 iterations (~3 GB)
+#   THREADS="1 2" BISECT=build/bisect OUT=/tmp/bench bash bench/e2e.sh
 #
-# Figures: generated cells per second (cells made / whole run), and peak
-# resident bytes per final cell. A baseline to compare with is kept in
-# bench/baseline-e2e.jsonl (bash bench/e2e.sh > new.jsonl, then
-# /usr/bin/python3 bench/compare.py bench/baseline-e2e.jsonl new.jsonl).
+# Figures: generated cells per second (cells made / whole run), seconds per
+# million generated cells, and peak resident bytes per final cell. A
+# baseline to compare with is kept in bench/baseline-e2e.jsonl (bash
+# bench/e2e.sh > new.jsonl, then /usr/bin/python3 bench/compare.py
+# bench/baseline-e2e.jsonl new.jsonl). The big case's input is data/ball.msh
+# (6,009 tets, size 0.3) refined everywhere for 2 iterations (56,635 tets):
+# close to issue 13's Gmsh ball of 49,090 tets (-clmax 0.148), without Gmsh.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 BISECT=${BISECT:-$root/build/bisect}
 OUT=${OUT:-$(mktemp -d)}
 ITER3D=${ITER3D:-12}
 ITER4D=${ITER4D:-25}
+THREADS=${THREADS:-"1 $(nproc)"}
+BIG=${BIG:-0}
 mkdir -p "$OUT"
 load=$(cut -d' ' -f1-3 /proc/loadavg)
 cpus=$(nproc)
@@ -24,14 +31,19 @@ cpus=$(nproc)
 run_case() { # name input region iterations extra...
   local name=$1 input=$2 region=$3 n=$4
   shift 4
-  local json
-  json=$("$BISECT" refine "$input" --region "$region" -n "$n" -o "$OUT/$name.vtu" -f -q --json "$@")
-  /usr/bin/python3 - "$name" "$load" "$cpus" "$json" <<'EOF'
+  local json threads
+  for threads in $THREADS; do
+    load=$(cut -d' ' -f1-3 /proc/loadavg)
+    json=$("$BISECT" refine "$input" --region "$region" -n "$n" -o "$OUT/$name.vtu" -f -q --json \
+      --threads "$threads" "$@")
+    /usr/bin/python3 - "$name" "$load" "$cpus" "$json" "$threads" <<'EOF'
 import json, sys
 name, load, cpus, j = sys.argv[1], sys.argv[2], int(sys.argv[3]), json.loads(sys.argv[4])
+threads = int(sys.argv[5])
 made = j["cells"] - j["initial_cells"]
 out = {
-    "case": name, "dim": j["dim"], "iterations": j["iterations"],
+    "case": f"{name}-t{threads}", "threads": threads, "dim": j["dim"],
+    "iterations": j["iterations"],
     "initial_cells": j["initial_cells"], "cells": j["cells"],
     "seconds": round(j["seconds"], 3),
     "stages": {k: round(v, 3) for k, v in j["stages"].items()},
@@ -42,9 +54,15 @@ out = {
 }
 print(json.dumps(out))
 EOF
+  done
 }
 
 run_case ball-hemisphere "$root/data/ball.msh" "$root/data/regions/hemisphere.json" "$ITER3D"
+if [[ $BIG == 1 ]]; then
+  "$BISECT" refine "$root/data/ball.msh" --region "$root/data/regions/everything3d.json" -n 2 \
+    -o "$OUT/ball-57k.vtu" -f -q --quality-csv none
+  run_case ball57k-hemisphere "$OUT/ball-57k.vtu" "$root/data/regions/hemisphere.json" 14
+fi
 "$BISECT" generate kuhn --dim 4 --cells 1 -o "$OUT/hypercube.vtu" -f 2>/dev/null
 run_case hypercube-moving-sphere "$OUT/hypercube.vtu" "$root/data/regions/moving-sphere.json" \
   "$ITER4D" -m longest
