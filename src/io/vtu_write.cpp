@@ -242,19 +242,15 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
          extra + " format=\"binary\">\n          ");
   const std::size_t bytes = count * sizeof(T);
   const std::size_t per_block = kBlock / sizeof(T);
-  std::vector<T> raw;
-  raw.reserve(std::min(count, per_block));
-  auto fill = [&](std::size_t first) {
-    raw.clear();
-    const std::size_t last = std::min(count, first + per_block);
-    for (std::size_t i = first; i < last; ++i)
-      raw.push_back(value(i));
-  };
   if (compression == VtuCompression::None) {
     const std::uint64_t header = bytes;
     w.base64(reinterpret_cast<const unsigned char *>(&header), sizeof header);
+    std::vector<T> raw;
+    raw.reserve(std::min(count, per_block));
     for (std::size_t first = 0; first < count; first += per_block) {
-      fill(first);
+      raw.clear();
+      for (std::size_t i = first; i < std::min(count, first + per_block); ++i)
+        raw.push_back(value(i));
       w.base64(reinterpret_cast<const unsigned char *>(raw.data()), raw.size() * sizeof(T));
     }
     w.end_base64();
