@@ -13,6 +13,7 @@
 #include "bisect/refine.hpp"
 
 #include "bisect/mark.hpp"
+#include "bisect/threads.hpp"
 #include "core/dimension.hpp"
 #include "core/numbering.hpp"
 #include "engine/entities.hpp"
@@ -142,6 +143,7 @@ public:
       std::vector<std::uint8_t> flag;
       std::vector<std::uint64_t> seen;
       std::vector<CellId> candidates;
+      std::vector<std::vector<CellId>> found;
       while (!work.empty()) {
         if (limits_.cancel && limits_.cancel->load())
           throw Cancelled{};
@@ -175,19 +177,27 @@ public:
             flag[m_.parent_edge[2 * v]] = 1;
             flag[m_.parent_edge[2 * v + 1]] = 1;
           }
-          for (std::size_t c = 0; c < cells_before; ++c) {
+          // The cells of each block found by one thread, taken in block
+          // order: the candidates' order does not depend on the threads.
+          for_blocks(cells_before, found, [&](std::size_t c) {
             const VertexId *x = m_.cell(CellId(c));
             int hits = 0;
             for (int i = 0; i < N; ++i)
               hits += flag[x[i]];
-            if (hits >= 2)
+            return hits >= 2;
+          });
+          for (const std::vector<CellId> &block : found)
+            for (CellId c : block)
               add(c);
-          }
         }
+        // Which candidates have a bisected edge: read-only lookups, by all
+        // threads, kept in candidate order.
         work.clear();
-        for (CellId c : candidates)
-          if (has_hanging_edge(c))
-            work.push_back(c);
+        for_blocks(candidates.size(), found,
+                   [&](std::size_t i) { return has_hanging_edge(candidates[i]); });
+        for (const std::vector<CellId> &block : found)
+          for (CellId i : block)
+            work.push_back(candidates[i]);
         if (!work.empty())
           ++result.closure_passes;
       }
@@ -209,6 +219,24 @@ public:
   }
 
 private:
+  // found[k] = the indices i in block k of [0, n) (blocks of kBlock) for
+  // which test(i) holds, in increasing order; blocks are tested by all
+  // threads when there are enough of them.
+  template <class Test>
+  static void for_blocks(std::size_t n, std::vector<std::vector<CellId>> &found, Test &&test) {
+    constexpr std::size_t kBlock = std::size_t(1) << 14;
+    const std::size_t blocks = (n + kBlock - 1) / kBlock;
+    found.resize(blocks);
+    const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
+    for (std::size_t k = 0; k < blocks; ++k) {
+      found[k].clear();
+      for (std::size_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i)
+        if (test(i))
+          found[k].push_back(CellId(i));
+    }
+  }
+
   std::pair<VertexId, VertexId> refinement_edge(CellId c) const {
     const VertexId *x = m_.cell(c);
     if (m_.stage[c] == Stage::Maubach)
