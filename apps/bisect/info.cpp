@@ -32,9 +32,11 @@ struct InfoArgs {
 
 int run_info(const InfoArgs &a) {
   const std::string &path = a.input;
-  Mesh mesh = load_mesh(path, load_progress(path, a.flags.quiet));
+  // Validation measures the invariants on its way: not measured again.
+  InputFacts facts;
+  Mesh mesh = load_mesh(path, load_progress(path, a.flags.quiet), &facts);
   const bool has_state = mesh.marked();
-  const Invariants inv = measure_invariants(mesh);
+  const Invariants &inv = facts.invariants;
   const QualitySummary q = quality_summary(mesh);
   const Box box = bounding_box(mesh);
   if (a.flags.json) {

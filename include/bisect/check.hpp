@@ -3,8 +3,10 @@
 
 #include "bisect/mesh.hpp"
 
+#include <array>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace bisect {
 
@@ -53,6 +55,15 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original = null
 void for_each_interior_facet(const Mesh &mesh,
                              const std::function<bool(CellId, int, CellId, int)> &visit);
 
+// The facets shared by two cells, each as its two cells (the smaller id
+// first), in increasing order of the facet's sorted vertex ids, in pieces:
+// what for_each_interior_facet visits, recorded by prepare_input.
+using InteriorFacets = std::vector<std::vector<std::array<CellId, 2>>>;
+// The same visit from a record of `mesh`'s interior facets (the local
+// indices from the cells' tuples as they are now).
+void for_each_interior_facet(const Mesh &mesh, const InteriorFacets &facets,
+                             const std::function<bool(CellId, int, CellId, int)> &visit);
+
 // The cheap final check `bisect refine` runs by default before writing (a
 // fraction of check_conformity's cost): no degenerate cell; every facet in at
 // most two cells; across every interior facet the two opposite vertices on
@@ -78,7 +89,15 @@ using LoadProgress = std::function<void(const char *step, double done)>;
 // its two sides (a boundary facet's centroid on another boundary facet).
 // `progress`, when set, hears of each step (done from 0.3 to 0.95: the read
 // before it is about 0.3 of a load).
-void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &progress = {});
+// What validation finds on its way that its callers would otherwise walk the
+// mesh again for (the `facts` of prepare_input).
+struct InputFacts {
+  bool want_interior = false; // set by the caller: record `interior`
+  Invariants invariants;      // all of them (the same values as measure_invariants)
+  InteriorFacets interior;
+};
+void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &progress = {},
+                   InputFacts *facts = nullptr);
 
 // The index of the first entity of `block` (mesh.hpp, Entities) that is not a
 // face of some cell of `mesh` (ids out of range included), or

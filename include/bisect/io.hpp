@@ -46,7 +46,10 @@ void check_output_format(const std::string &name, int dim, const std::string &fo
 // bisection state restored when the file carries one (then mesh.marked();
 // otherwise the mesh is unmarked: see ensure_marked in mark.hpp).
 // `progress`, when set, hears of each step (see LoadProgress in check.hpp).
-Mesh load_mesh(const std::string &path, const LoadProgress &progress = {});
+// `facts`, when given, receives what validation found (InputFacts in
+// check.hpp: the invariants, so that they need not be measured again).
+Mesh load_mesh(const std::string &path, const LoadProgress &progress = {},
+               InputFacts *facts = nullptr);
 
 // Writes `mesh` with its bisection state (the bisect:* cell arrays, so that
 // refining the file continues the same sequence) through a temporary file

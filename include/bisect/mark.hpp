@@ -4,6 +4,7 @@
 
 #include "bisect/mesh.hpp"
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -88,7 +89,11 @@ void force_type(Mesh &mesh, const std::string &type);
 constexpr int state_check_levels(int dim) {
   return dim == 4 ? 4 : 3;
 }
-std::string check_state_consistency(const Mesh &mesh);
+// `interior`, when given, is the mesh's record of its interior facets (see
+// InteriorFacets in check.hpp), which saves a walk over its facets.
+std::string
+check_state_consistency(const Mesh &mesh,
+                        const std::vector<std::vector<std::array<CellId, 2>>> *interior = nullptr);
 
 std::optional<Marking> parse_marking(const std::string &name);
 const char *marking_name(Marking marking);

@@ -3,7 +3,9 @@
 
 #include "bisect/mesh.hpp"
 
+#include <array>
 #include <string>
+#include <vector>
 
 namespace bisect {
 
@@ -79,7 +81,9 @@ void encode_state(Mesh &mesh);
 // present but invalid: a value out of range (marking, stage, tag, order not a
 // permutation, edge ranks), or a state that is inconsistent (see
 // check_state_consistency).
-bool decode_state(Mesh &mesh, const std::string &path);
+// `interior`: as for check_state_consistency.
+bool decode_state(Mesh &mesh, const std::string &path,
+                  const std::vector<std::vector<std::array<CellId, 2>>> *interior = nullptr);
 // After writing an encoded mesh: restores the tuples encode_state reordered
 // and removes the bisect:* arrays, so the mesh is as before encode_state.
 void strip_state(Mesh &mesh);

@@ -416,7 +416,7 @@ private:
 
 } // namespace
 
-std::string check_state_consistency(const Mesh &mesh) {
+std::string check_state_consistency(const Mesh &mesh, const InteriorFacets *interior) {
   if (mesh.dim < 3 || !mesh.marked() || mesh.num_cells() < 2)
     return {};
   const EdgeOrder order = edge_order(mesh);
@@ -449,7 +449,7 @@ std::string check_state_consistency(const Mesh &mesh) {
       }
       return false;
     };
-    for_each_interior_facet(mesh, [&](CellId a, int i, CellId b, int j) {
+    auto visit = [&](CellId a, int i, CellId b, int j) {
       if (reflected(a, i, b, j))
         return true;
       walk.record(mesh.cell(a), mesh.stage[a], mesh.tag[a], i);
@@ -463,7 +463,11 @@ std::string check_state_consistency(const Mesh &mesh) {
       failure = cell_pair_name(mesh, a, b) + " would bisect their shared facet " +
                 face_ids(mesh, facet, D) + " differently";
       return false;
-    });
+    };
+    if (interior)
+      for_each_interior_facet(mesh, *interior, visit);
+    else
+      for_each_interior_facet(mesh, visit);
   });
   return failure;
 }

@@ -118,7 +118,8 @@ void strip_state(Mesh &mesh) {
   strip_tree(mesh);
 }
 
-bool decode_state(Mesh &mesh, const std::string &path) {
+bool decode_state(Mesh &mesh, const std::string &path,
+                  const std::vector<std::vector<std::array<CellId, 2>>> *interior) {
   int io = find_array(mesh.cell_data, kOrderArray), is = find_array(mesh.cell_data, kStageArray),
       it = find_array(mesh.cell_data, kTagArray), im = find_array(mesh.cell_data, kMarkingArray),
       ip = find_array(mesh.cell_data, kStateArray);
@@ -232,7 +233,7 @@ bool decode_state(Mesh &mesh, const std::string &path) {
     for (int i = 0; i < nv; ++i)
       x[i] = conn[perm[i]];
   }
-  if (std::string why = check_state_consistency(mesh); !why.empty())
+  if (std::string why = check_state_consistency(mesh, interior); !why.empty())
     throw InputError(path, "the bisection state is inconsistent (" + why +
                                "): the file was not written by bisect as it is, or was altered "
                                "(cell order, connectivity or bisect:* arrays)");

@@ -208,20 +208,29 @@ ValueType value_type_named(const std::string &t) {
   return ValueType::Unknown;
 }
 
-// The selected tuples (file ids in `rows`) of `a`; all of them, in order,
-// are moved rather than copied.
+// The selected tuples (file ids in `rows`, increasing) of `a`. With
+// `in_place` they are moved to the front of a's values, which become the
+// result (rows[i] >= i, so no tuple is overwritten before it is read): a
+// copy would touch as much fresh memory again, and a page fault per page of
+// it is a large part of reading. Otherwise copied, `a` left as it is.
 template <class Row>
 DataArray take_rows(vtu::Array &a, const std::string &name, const std::vector<Row> &rows,
-                    bool all_rows) {
+                    bool in_place) {
   DataArray out;
   out.name = name;
   out.components = a.components;
   out.type = value_type_named(a.type);
-  if (all_rows) {
+  const std::size_t k = std::size_t(a.components);
+  if (in_place) {
+    double *to = a.values.data();
+    if (rows.size() * k != a.values.size())
+      for (Row r : rows)
+        for (std::size_t j = 0; j < k; ++j)
+          *to++ = a.values[std::size_t(r) * k + j];
+    a.values.resize(rows.size() * k);
     out.values = std::move(a.values);
     return out;
   }
-  const std::size_t k = std::size_t(a.components);
   out.values.resize(rows.size() * k);
   double *to = out.values.data();
   for (Row r : rows)
@@ -247,14 +256,14 @@ const vtu::Array &time_array(const std::string &path, const vtu::Grid &g) {
 // cells; 0 in an entity's rows) and float arrays that are NaN in every row
 // of the block (what the writer pads an entity's missing array with). Each
 // must be a face of some cell.
-void add_entities(const std::string &path, vtu::Grid &g, const KeptCells &kept,
-                  const std::vector<VertexId> &new_id, Mesh &mesh) {
-  static const char *const kNames[4] = {"vertex", "line", "triangle", "tetra"};
+// entity_blocks takes their vertices (before the connectivity is compacted),
+// add_entities the rest.
+std::vector<Entities> entity_blocks(const vtu::Grid &g, const KeptCells &kept,
+                                    const std::vector<VertexId> &new_id) {
+  std::vector<Entities> blocks;
   for (int d = 0; d < kept.dim; ++d) {
     const std::vector<CellId> &ids = kept.entity_ids[d];
-    if (ids.empty())
-      continue;
-    Entities block;
+    Entities &block = blocks.emplace_back();
     block.dim = d;
     block.vertices.reserve(ids.size() * std::size_t(d + 1));
     for (CellId c : ids) {
@@ -262,6 +271,18 @@ void add_entities(const std::string &path, vtu::Grid &g, const KeptCells &kept,
       for (int k = 0; k <= d; ++k)
         block.vertices.push_back(new_id[pts[k]]); // kNoVertex: not a face
     }
+  }
+  return blocks;
+}
+
+void add_entities(const std::string &path, vtu::Grid &g, const KeptCells &kept,
+                  std::vector<Entities> &&blocks, Mesh &mesh) {
+  static const char *const kNames[4] = {"vertex", "line", "triangle", "tetra"};
+  for (int d = 0; d < kept.dim; ++d) {
+    const std::vector<CellId> &ids = kept.entity_ids[d];
+    if (ids.empty())
+      continue;
+    Entities &block = blocks[std::size_t(d)];
     const std::size_t bad = first_entity_not_a_face(mesh, block);
     if (bad != std::size_t(-1))
       throw InputError(path, "cell " + std::to_string(ids[bad]) + " (" + kNames[d] +
@@ -327,6 +348,7 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
       used.push_back(VertexId(p));
     }
   const bool all_points = used.size() == np, all_cells = kept.ids.size() == g.num_cells;
+  std::vector<Entities> blocks = entity_blocks(g, kept, new_id);
 
   Mesh mesh;
   mesh.dim = kept.dim;
@@ -334,14 +356,19 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
     // Every cell kept, every point used in file order: the ids stay as they are.
     mesh.cells = std::move(g.connectivity);
   } else {
-    mesh.cells.resize(kept.ids.size() * std::size_t(nvc));
-    VertexId *to = mesh.cells.data();
+    // In place, as in take_rows: kept cell i starts at or after i * nvc
+    // (each cell before it has at least one point), and its ids are read
+    // before any is written.
+    VertexId *to = g.connectivity.data();
     for (CellId c : kept.ids) {
       const std::uint32_t *pts = g.connectivity.data() + g.offsets[c];
+      VertexId ids[5];
       for (int i = 0; i < nvc; ++i)
-        *to++ = new_id[pts[i]];
+        ids[i] = new_id[pts[i]];
+      to = std::copy(ids, ids + nvc, to);
     }
-    g.connectivity = {}; // done with: free it before the arrays are copied
+    g.connectivity.resize(kept.ids.size() * std::size_t(nvc));
+    mesh.cells = std::move(g.connectivity);
   }
 
   // Coordinates: (x, y) in 2D, (x, y, z) in 3D, (x, y, z, t) in 4D.
@@ -376,13 +403,13 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
     vtu::Array &a = g.point_data[i];
     if ((four && &a == t) || !a.numeric)
       continue;
-    mesh.point_data.push_back(take_rows(a, array_name(a, i), used, all_points));
+    mesh.point_data.push_back(take_rows(a, array_name(a, i), used, true));
   }
-  add_entities(path, g, kept, new_id, mesh); // before the cell arrays are moved
+  add_entities(path, g, kept, std::move(blocks), mesh); // before the cell arrays are moved
   for (std::size_t i = 0; i < g.cell_data.size(); ++i) {
     vtu::Array &a = g.cell_data[i];
     if (a.numeric)
-      mesh.cell_data.push_back(take_rows(a, array_name(a, i), kept.ids, all_cells));
+      mesh.cell_data.push_back(take_rows(a, array_name(a, i), kept.ids, true));
   }
   add_physical_names(g, mesh);
   return mesh;

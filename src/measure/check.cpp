@@ -766,6 +766,7 @@ struct FacetReport {
   std::string
       nonmanifold; // first facet shared by 3+ cells, e.g. "facet (1, 2, 3) is shared by 3 cells"
   std::string overlap; // first folded pair, e.g. "cells 5 and 9 overlap across facet (1, 2, 3)"
+  std::vector<std::array<CellId, 2>> interior; // with keep_interior: see InteriorFacets
 };
 
 // Side of the facet's hyperplane on which the opposite vertex of facet m of
@@ -798,6 +799,7 @@ template <int Dim, bool SideOnly> struct FacetVisitor {
   const std::vector<std::int8_t> *signs;
   bool keep_boundary;
   FacetReport r;
+  bool keep_interior = false;
   // Interior facets matched without a visit (the final check's fast path).
   void interior_pairs(std::size_t n) requires SideOnly { r.facets += n; }
   void operator()(const std::array<VertexId, Dim> &key, const std::uint32_t *refs, int count) {
@@ -813,6 +815,11 @@ template <int Dim, bool SideOnly> struct FacetVisitor {
       if (keep_boundary)
         r.boundary.insert(r.boundary.end(), key.begin(), key.end());
     } else if (count == 2) {
+      if constexpr (!SideOnly)
+        if (keep_interior) {
+          const CellId a = CellId((refs[0] & ~kSideBit) / M), b = CellId((refs[1] & ~kSideBit) / M);
+          r.interior.push_back({std::min(a, b), std::max(a, b)});
+        }
       if (!signs || !r.overlap.empty())
         return;
       if constexpr (SideOnly) {
@@ -835,12 +842,20 @@ template <int Dim, bool SideOnly> struct FacetVisitor {
   }
 };
 
+// With `interior`, the facets shared by two cells are recorded there
+// (InteriorFacets in check.hpp), one piece per block of the walk.
 template <int Dim, bool SideOnly = false>
-FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs,
-                       bool keep_boundary) {
+FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs, bool keep_boundary,
+                       InteriorFacets *interior = nullptr) {
   std::vector<FacetVisitor<Dim, SideOnly>> parts;
   for_each_subsimplex_blocks<Dim, Dim, true, SideOnly>(
-      mesh, FacetVisitor<Dim, SideOnly>{&mesh, signs, keep_boundary, {}}, parts, signs);
+      mesh, FacetVisitor<Dim, SideOnly>{&mesh, signs, keep_boundary, {}, interior != nullptr},
+      parts, signs);
+  if (interior) {
+    interior->clear();
+    for (auto &part : parts)
+      interior->push_back(std::move(part.r.interior));
+  }
   // In block order, which is key order: the same sums and the same first
   // finding as one walk in one thread.
   FacetReport r;
@@ -931,8 +946,11 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
 }
 
 // V - E + F - ... over the vertices used by cells; `facets` is the number of
-// distinct facets (already known from facet_pass).
-template <int Dim> long long euler_characteristic(const Mesh &mesh, std::size_t facets) {
+// distinct facets (already known from facet_pass), `ridges` that of the
+// faces of Dim - 1 vertices when known (from find_fold's walk in 3D and 4D).
+template <int Dim>
+long long euler_characteristic(const Mesh &mesh, std::size_t facets,
+                               std::size_t ridges = std::size_t(-1)) {
   std::vector<char> used(mesh.num_vertices(), 0);
   for (VertexId v : mesh.cells)
     used[v] = 1;
@@ -942,10 +960,12 @@ template <int Dim> long long euler_characteristic(const Mesh &mesh, std::size_t 
     chi += sign * count;
     sign = -sign;
   };
-  if constexpr (Dim >= 3)
+  if constexpr (Dim == 3)
+    add((long long)(ridges != std::size_t(-1) ? ridges : count_subsimplices<Dim, 2>(mesh)));
+  if constexpr (Dim == 4) {
     add((long long)count_subsimplices<Dim, 2>(mesh));
-  if constexpr (Dim >= 4)
-    add((long long)count_subsimplices<Dim, 3>(mesh));
+    add((long long)(ridges != std::size_t(-1) ? ridges : count_subsimplices<Dim, 3>(mesh)));
+  }
   add((long long)facets);
   add((long long)mesh.num_cells());
   return chi;
@@ -1796,8 +1816,10 @@ template <int Dim> struct FoldVisitor {
   std::vector<VertexId> extras;
   AngleFinding f;
   std::string found;
+  std::size_t faces = 0; // distinct faces visited
   explicit FoldVisitor(const Mesh &m) : mesh(&m), star(m) {}
   void operator()(const std::array<VertexId, Dim - 1> &key, const std::uint32_t *refs, int count) {
+    ++faces;
     if (!found.empty())
       return;
     extras.clear();
@@ -1813,7 +1835,9 @@ template <int Dim> struct FoldVisitor {
   }
 };
 
-template <int Dim> std::string find_fold(const Mesh &mesh) {
+// `faces`, when given and in 3D or 4D, receives the number of distinct faces of
+// Dim - 1 vertices (edges in 3D, triangles in 4D).
+template <int Dim> std::string find_fold(const Mesh &mesh, std::size_t *faces = nullptr) {
   if constexpr (Dim == 2) {
     constexpr int N = Dim + 1;
     const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
@@ -1862,6 +1886,11 @@ template <int Dim> std::string find_fold(const Mesh &mesh) {
     // finding in block order (key order), as one walk in one thread.
     std::vector<FoldVisitor<Dim>> parts;
     for_each_subsimplex_blocks<Dim, Dim - 1>(mesh, FoldVisitor<Dim>(mesh), parts);
+    if (faces) {
+      *faces = 0;
+      for (const FoldVisitor<Dim> &part : parts)
+        *faces += part.faces;
+    }
     for (const FoldVisitor<Dim> &part : parts)
       if (!part.found.empty())
         return part.found;
@@ -2001,7 +2030,26 @@ void for_each_interior_facet(const Mesh &mesh,
   });
 }
 
-void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &progress) {
+void for_each_interior_facet(const Mesh &mesh, const InteriorFacets &facets,
+                             const std::function<bool(CellId, int, CellId, int)> &visit) {
+  const int n = mesh.cell_size();
+  // The local index in x of the vertex not in y.
+  auto opposite = [&](const VertexId *x, const VertexId *y) {
+    for (int i = 0; i < n; ++i)
+      if (std::find(y, y + n, x[i]) == y + n)
+        return i;
+    return 0;
+  };
+  for (const auto &piece : facets)
+    for (const auto &[a, b] : piece) {
+      const VertexId *x = mesh.cell(a), *y = mesh.cell(b);
+      if (!visit(a, opposite(x, y), b, opposite(y, x)))
+        return;
+    }
+}
+
+void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &progress,
+                   InputFacts *facts) {
   // The fractions are the steps' shares of `bisect info`'s time on a
   // 1.85M-tet .vtu (the read before them about 0.3).
   auto step = [&](const char *what, double done) {
@@ -2039,11 +2087,12 @@ void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &prog
     std::size_t bad;
     double bad_volume = 0;
     std::vector<std::int8_t> signs;
-    cell_pass<D>(mesh, bad, bad_volume, &signs);
+    const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
     if (bad != std::size_t(-1))
       reject(cell_name(mesh, CellId(bad)) + " has zero volume");
     step("matching facets", 0.4);
-    const FacetReport fr = facet_pass<D>(mesh, &signs, true);
+    const FacetReport fr = facet_pass<D>(
+        mesh, &signs, true, facts && facts->want_interior ? &facts->interior : nullptr);
     if (!fr.nonmanifold.empty()) {
       // "facet (a, b) is shared by 3 cells" -> "non-manifold: facet (a, b) shared by 3 cells"
       std::string s = fr.nonmanifold;
@@ -2059,8 +2108,17 @@ void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &prog
     if (std::string s = find_overlap<D>(mesh); !s.empty())
       reject("tangled: " + s);
     step("checking the angles around faces", 0.75);
-    if (std::string s = find_fold<D>(mesh); !s.empty())
+    std::size_t ridges = std::size_t(-1);
+    if (std::string s = find_fold<D>(mesh, &ridges); !s.empty())
       reject(s);
+    // What the walks found, for the caller (the same values as
+    // measure_invariants: the same passes, summed in the same order).
+    if (facts) {
+      facts->invariants.volume = volume;
+      facts->invariants.boundary_measure = fr.boundary_measure;
+      facts->invariants.boundary_facets = fr.boundary_facets;
+      facts->invariants.euler = euler_characteristic<D>(mesh, fr.facets, ridges);
+    }
     // Orient every cell positively (a negatively oriented cell is not an error).
     for (std::size_t c = 0; c < nc; ++c)
       if (signs[c] < 0)

@@ -807,3 +807,37 @@ TEST_CASE("overlap: the same finding for 1, 2 and 3 threads, the smallest pair o
   }
   set_threads(0);
 }
+
+TEST_CASE("input facts: validation's invariants and interior facets are those measured apart "
+          "(2D, 3D, 4D, 1-3 threads)",
+          "[check][threads][2d][3d][4d]") {
+  const int dim = GENERATE(2, 3, 4);
+  Mesh m = graded_kuhn(dim, dim == 4 ? 2 : 4);
+  Mesh plain = m;
+  prepare_input(plain, "t.vtu");
+  const Invariants want = measure_invariants(plain);
+  std::vector<std::array<int, 4>> walked;
+  for_each_interior_facet(plain, [&](CellId a, int i, CellId b, int j) {
+    walked.push_back({int(a), i, int(b), j});
+    return true;
+  });
+  for (int t : {1, 2, 3}) {
+    INFO("dim " << dim << ", threads " << t);
+    set_threads(t);
+    Mesh copy = m;
+    InputFacts facts;
+    facts.want_interior = true;
+    prepare_input(copy, "t.vtu", {}, &facts);
+    CHECK(facts.invariants.volume == want.volume);
+    CHECK(facts.invariants.boundary_measure == want.boundary_measure);
+    CHECK(facts.invariants.boundary_facets == want.boundary_facets);
+    CHECK(facts.invariants.euler == want.euler);
+    std::vector<std::array<int, 4>> recorded;
+    for_each_interior_facet(copy, facts.interior, [&](CellId a, int i, CellId b, int j) {
+      recorded.push_back({int(a), i, int(b), j});
+      return true;
+    });
+    CHECK(recorded == walked);
+  }
+  set_threads(0);
+}
