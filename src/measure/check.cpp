@@ -174,13 +174,15 @@ using UIntFor =
 // buckets fills `buffer` from one scan of the cells and visits its
 // sub-simplices in key order. Chunks are independent: several threads could
 // walk different chunks, each with its own buffer and visitor.
-template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
+template <int Dim, int K, bool WithRefs, bool SideOnly, int IdBits = SideOnly ? 31 : 32>
+struct Walk {
   static_assert(K >= 2 && K <= 4);
   static constexpr auto subsets = subsimplices<Dim + 1, K>();
   static constexpr int M = int(subsets.size());
   static_assert(!SideOnly || (WithRefs && K == Dim));
   static constexpr int kRefBits = SideOnly ? 1 : WithRefs ? 32 : 0;
-  static constexpr int kIdBits = SideOnly ? 31 : 32;
+  static constexpr int kIdBits = IdBits;
+  static_assert(IdBits == 32 || SideOnly);
   static constexpr std::size_t kStreams = 1024;
   static constexpr std::size_t kBlock = 16;               // coarse buckets per visitor (see chunk)
   static constexpr std::size_t kCellsPerThread = 1 << 16; // fewer cells: fewer threads
@@ -213,7 +215,7 @@ template <int Dim, int K, bool WithRefs, bool SideOnly> struct Walk {
     const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
     if (nc * M >= std::size_t(kSideBit))
       throw ResourceError("", "mesh too large for the 32-bit sub-simplex references of the checks");
-    if (SideOnly && nv >= std::size_t(kSideBit))
+    if (SideOnly && nv >= (std::size_t(1) << kIdBits))
       throw ResourceError("", "mesh too large for the 31-bit vertex ids of the final check");
     while (shift < 16 && (nv >> shift) > kStreams)
       ++shift;
@@ -555,11 +557,12 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
 // the mesh alone), and visitors[k] sees block k's sub-simplices in key order;
 // the caller combines the visitors' results in index order, which gives the
 // same result for every thread count.
-template <int Dim, int K, bool WithRefs = true, bool SideOnly = false, class Visitor>
+template <int Dim, int K, bool WithRefs = true, bool SideOnly = false,
+          int IdBits = SideOnly ? 31 : 32, class Visitor>
 void for_each_subsimplex_blocks(const Mesh &mesh, const Visitor &prototype,
                                 std::vector<Visitor> &visitors,
                                 const std::vector<std::int8_t> *signs = nullptr) {
-  using W = Walk<Dim, K, WithRefs, SideOnly>;
+  using W = Walk<Dim, K, WithRefs, SideOnly, IdBits>;
   const W walk(mesh, signs);
   visitors.assign((walk.start.size() - 1 + W::kBlock - 1) / W::kBlock, prototype);
   typename W::Buffer buffer;
@@ -844,11 +847,11 @@ template <int Dim, bool SideOnly> struct FacetVisitor {
 
 // With `interior`, the facets shared by two cells are recorded there
 // (InteriorFacets in check.hpp), one piece per block of the walk.
-template <int Dim, bool SideOnly = false>
+template <int Dim, bool SideOnly = false, int IdBits = SideOnly ? 31 : 32>
 FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs, bool keep_boundary,
                        InteriorFacets *interior = nullptr) {
   std::vector<FacetVisitor<Dim, SideOnly>> parts;
-  for_each_subsimplex_blocks<Dim, Dim, true, SideOnly>(
+  for_each_subsimplex_blocks<Dim, Dim, true, SideOnly, IdBits>(
       mesh, FacetVisitor<Dim, SideOnly>{&mesh, signs, keep_boundary, {}, interior != nullptr},
       parts, signs);
   if (interior) {
@@ -1975,6 +1978,17 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
   });
 }
 
+// The final check's facet walk: 4D facets pack three ids and the side bit
+// into 64 bits while ids fit in 21 bits (meshes below 2,097,152 vertices),
+// else into 128; half the buffer and hash table.
+template <int D>
+static FacetReport final_facet_pass(const Mesh &mesh, const std::vector<std::int8_t> &signs) {
+  if constexpr (D == 4)
+    if (mesh.num_vertices() < (std::size_t(1) << 21))
+      return facet_pass<D, true, 21>(mesh, &signs, true);
+  return facet_pass<D, true>(mesh, &signs, true);
+}
+
 CheckResult check_refined(const Mesh &mesh, const Invariants &original) {
   auto fail = [](std::string what) { return CheckResult{false, std::move(what)}; };
   if (std::string s = check_shape(mesh); !s.empty())
@@ -1991,7 +2005,7 @@ CheckResult check_refined(const Mesh &mesh, const Invariants &original) {
     if (bad != std::size_t(-1))
       return fail(degenerate_cell(mesh, bad, bad_volume));
     const FacetReport fr = mesh.num_vertices() < std::size_t(kSideBit)
-                               ? facet_pass<D, true>(mesh, &signs, true)
+                               ? final_facet_pass<D>(mesh, signs)
                                : facet_pass<D>(mesh, &signs, true);
     if (!fr.nonmanifold.empty())
       return fail(fr.nonmanifold);
