@@ -102,6 +102,16 @@ constexpr auto kNetwork = [] {
         {{0, 1}, {3, 4}, {2, 4}, {2, 3}, {0, 3}, {0, 2}, {1, 4}, {1, 3}, {1, 2}}};
 }();
 
+// The smallest and second smallest of a cell's N ids.
+template <int N> std::pair<VertexId, VertexId> two_smallest(const VertexId *cell) {
+  VertexId first = std::min(cell[0], cell[1]), second = std::max(cell[0], cell[1]);
+  for (int i = 2; i < N; ++i) {
+    second = std::min(second, std::max(first, cell[i]));
+    first = std::min(first, cell[i]);
+  }
+  return {first, second};
+}
+
 // keys[i] = cell's i-th smallest id << 3 | its local index.
 template <int N>
 [[gnu::always_inline]] inline int sort_cell(const VertexId *cell,
@@ -230,11 +240,7 @@ struct Walk {
         if constexpr (K == Dim) {
           // A facet's smallest id is the cell's smallest, except for the
           // facet without it, whose smallest is the cell's second smallest.
-          VertexId first = std::min(cell[0], cell[1]), second = std::max(cell[0], cell[1]);
-          for (int i = 2; i <= Dim; ++i) {
-            second = std::min(second, std::max(first, cell[i]));
-            first = std::min(first, cell[i]);
-          }
+          const auto [first, second] = two_smallest<Dim + 1>(cell);
           mine[first >> shift] += Dim;
           ++mine[second >> shift];
         } else {
@@ -425,11 +431,7 @@ struct Walk {
           // the sort's parity (see facet_side).
           // Most cells have no facet in a chunk: the two smallest ids
           // decide that, without the sort.
-          VertexId first = std::min(cell[0], cell[1]), second = std::max(cell[0], cell[1]);
-          for (int i = 2; i <= Dim; ++i) {
-            second = std::min(second, std::max(first, cell[i]));
-            first = std::min(first, cell[i]);
-          }
+          const auto [first, second] = two_smallest<Dim + 1>(cell);
           if (first >= hi_v || second < lo_v)
             continue;
           std::array<std::uint64_t, Dim + 1> keys;

@@ -29,6 +29,7 @@ constexpr double factorial(int n) {
 // replaced was 15% of a 4D run). Its rounding error, a few units of
 // |a| |b| |c| |d| * 1e-16, stays far below the degeneracy threshold 1e-14 * l^4.
 template <int Dim> double determinant(std::array<double, Dim * Dim> a) {
+  static_assert(Dim >= 2 && Dim <= 4);
   if constexpr (Dim == 4) {
     const double *r0 = &a[0], *r1 = &a[4], *r2 = &a[8], *r3 = &a[12];
     auto minor = [](const double *x, const double *y, int i, int j) {
@@ -42,29 +43,6 @@ template <int Dim> double determinant(std::array<double, Dim * Dim> a) {
   } else if constexpr (Dim == 3) {
     return a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) +
            a[2] * (a[3] * a[7] - a[4] * a[6]);
-  } else {
-    double det = 1;
-    for (int k = 0; k < Dim; ++k) {
-      int p = k;
-      for (int i = k + 1; i < Dim; ++i)
-        if (std::abs(a[i * Dim + k]) > std::abs(a[p * Dim + k]))
-          p = i;
-      if (a[p * Dim + k] == 0)
-        return 0;
-      if (p != k) {
-        for (int j = 0; j < Dim; ++j)
-          std::swap(a[k * Dim + j], a[p * Dim + j]);
-        det = -det;
-      }
-      const double pivot = a[k * Dim + k];
-      det *= pivot;
-      for (int i = k + 1; i < Dim; ++i) {
-        const double f = a[i * Dim + k] / pivot;
-        for (int j = k + 1; j < Dim; ++j)
-          a[i * Dim + j] -= f * a[k * Dim + j];
-      }
-    }
-    return det;
   }
 }
 
