@@ -132,6 +132,9 @@ constexpr std::size_t kChunkBytes = std::size_t(96) << 20;
 
 // See check_testing.hpp.
 bool g_sorted_final_walk = false;
+// The hashing path's piece size (see match_bucket); a test sets it small.
+constexpr std::size_t kMatchPiece = 2048;
+std::size_t g_match_piece = kMatchPiece;
 
 // An allocator whose resize() leaves new elements uninitialised (for trivial
 // types): the walk's buffer is written in full before it is read, and
@@ -198,6 +201,14 @@ struct Walk {
   static constexpr std::size_t kCellsPerThread = 1 << 16; // fewer cells: fewer threads
   using Packed = UIntFor<kIdBits *(K - 1) + kRefBits>;
   using Buffer = std::vector<Packed, UninitialisedAllocator<Packed>>;
+  using Fine = std::vector<std::uint16_t, UninitialisedAllocator<std::uint16_t>>;
+  // A chunk's entries and each entry's smallest id within its coarse bucket,
+  // sized once for the largest chunk: growing them chunk by chunk copied the
+  // old entries and touched fresh pages again.
+  struct Buffers {
+    Buffer packed;
+    Fine fine;
+  };
 
   const Mesh &mesh;
   const std::vector<std::int8_t> *signs;
@@ -272,6 +283,18 @@ struct Walk {
     return out;
   }
 
+  // The buffers for the largest of `chunks`.
+  Buffers buffers_for(const std::vector<std::pair<std::size_t, std::size_t>> &chunks) const {
+    std::size_t most = 0;
+    for (const auto &[b0, b1] : chunks)
+      most = std::max(most, start[b1] - start[b0]);
+    Buffers buffers;
+    buffers.packed.reserve(most);
+    if (shift)
+      buffers.fine.reserve(most);
+    return buffers;
+  }
+
   // One sub-simplex, packed: the K-1 ids after the smallest, then the
   // reference (or the side bit), high to low bits.
   Packed pack(const VertexId *cell, std::size_t c, int m, std::array<VertexId, K> &key) const {
@@ -331,58 +354,113 @@ struct Walk {
   struct MatchTable {
     std::vector<MatchSlot> slots;
     std::uint32_t stamp = 0;
+    // A coarse bucket split by the high bits of `fine` (see match_bucket).
+    std::vector<Packed> ids;
+    std::vector<std::uint16_t> fine;
+    std::vector<std::uint32_t> count;
   };
 
-  // Matches the entries [lo, hi) of coarse bucket b. When every facet comes
-  // once, or twice with opposite sides, visits the single ones in key order
-  // (each with count 1, as the sorted walk would), tells the visitor how many
-  // pairs there were, and returns true. Otherwise visits nothing and returns
-  // false: the sorted walk then finds and names the first offending facet.
-  template <class Visit>
-  bool match_bucket(std::size_t b, std::size_t lo, std::size_t hi, const Buffer &buffer,
-                    const std::vector<std::uint16_t, UninitialisedAllocator<std::uint16_t>> &fine,
-                    MatchTable &table, std::vector<std::pair<std::uint16_t, Packed>> &singles,
-                    Visit &visit) const {
-    const std::size_t n = hi - lo;
+  // Hashes entries [0, n) of (ids, fine), entries of one coarse bucket, and
+  // appends the facets seen once to `singles`, sorted. Adds the facets seen
+  // twice with opposite sides to `pairs`; false on a third copy or two
+  // copies on one side.
+  static bool match_range(const Packed *ids, const std::uint16_t *fine, std::size_t n,
+                          MatchTable &table, std::vector<std::pair<std::uint16_t, Packed>> &singles,
+                          std::size_t &pairs) {
+    // Most facets come in pairs, so at most n / 2 + 1 distinct keys: a load
+    // of at most about one half.
     std::size_t cap = 64;
-    while (cap < 2 * n)
+    while (cap < n)
       cap *= 2;
     if (table.slots.size() < cap || table.stamp == 0xFFFFFFFFu) {
       table.slots.assign(std::max(cap, table.slots.size()), MatchSlot{0, 0, 0, 0, 0});
       table.stamp = 0;
     }
     const std::uint32_t stamp = ++table.stamp;
-    // A table sized for this bucket: the low bits of the hash.
+    // A table sized for this range: the low bits of the hash.
     const std::size_t mask = cap - 1;
-    std::size_t pairs = 0;
-    for (std::size_t i = lo; i < hi; ++i) {
-      const Packed ids = buffer[i] >> 1;
-      const std::uint8_t side = std::uint8_t(buffer[i] & 1u);
+    std::size_t matched = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Packed key = ids[i] >> 1;
+      const std::uint8_t side = std::uint8_t(ids[i] & 1u);
       std::uint64_t h =
-          (std::uint64_t(ids) ^ (std::uint64_t(fine[i]) << 47)) * 0x9E3779B97F4A7C15ull;
+          (std::uint64_t(key) ^ (std::uint64_t(fine[i]) << 47)) * 0x9E3779B97F4A7C15ull;
       h ^= h >> 32;
       for (std::size_t at = h & mask;; at = (at + 1) & mask) {
         MatchSlot &slot = table.slots[at];
         if (slot.stamp != stamp) {
-          slot = MatchSlot{ids, stamp, fine[i], side, 1};
+          slot = MatchSlot{key, stamp, fine[i], side, 1};
           break;
         }
-        if (slot.ids == ids && slot.fine == fine[i]) {
+        if (slot.ids == key && slot.fine == fine[i]) {
           if (slot.copies != 1 || slot.side == side)
             return false; // a third copy, or two cells on one side
           slot.copies = 2;
-          ++pairs;
+          ++matched;
           break;
         }
       }
     }
-    singles.clear();
+    pairs += matched;
+    // Inside the domain every facet is matched: no need to scan the table.
+    if (2 * matched == n)
+      return true;
+    const std::size_t first = singles.size();
     for (std::size_t at = 0; at < cap; ++at) {
       const MatchSlot &slot = table.slots[at];
       if (slot.stamp == stamp && slot.copies == 1)
         singles.emplace_back(slot.fine, Packed((slot.ids << 1) | slot.side));
     }
-    std::sort(singles.begin(), singles.end());
+    std::sort(singles.begin() + std::ptrdiff_t(first), singles.end());
+    return true;
+  }
+
+  // Matches the entries [lo, hi) of coarse bucket b. When every facet comes
+  // once, or twice with opposite sides, visits the single ones in key order
+  // (each with count 1, as the sorted walk would), tells the visitor how many
+  // pairs there were, and returns true. Otherwise visits nothing and returns
+  // false: the sorted walk then finds and names the first offending facet.
+  // A large bucket is first split by the high bits of its entries' smallest
+  // ids into pieces of about kMatchPiece entries, so that the table of each
+  // stays in the core's cache: with one table per coarse bucket (1 MB for a
+  // 4D bucket) every probe missed L2, 50 ns per facet.
+  template <class Visit>
+  bool match_bucket(std::size_t b, std::size_t lo, std::size_t hi, const Buffer &buffer,
+                    const Fine &fine, MatchTable &table,
+                    std::vector<std::pair<std::uint16_t, Packed>> &singles, Visit &visit) const {
+    const std::size_t n = hi - lo;
+    int split = 0; // 2^split pieces
+    while (split < shift && (n >> split) > g_match_piece)
+      ++split;
+    std::size_t pairs = 0;
+    singles.clear();
+    if (split == 0) {
+      if (!match_range(buffer.data() + lo, fine.data() + lo, n, table, singles, pairs))
+        return false;
+    } else {
+      const int down = shift - split;
+      const std::size_t pieces = std::size_t(1) << split;
+      table.count.assign(pieces + 1, 0);
+      for (std::size_t i = lo; i < hi; ++i)
+        ++table.count[(fine[i] >> down) + 1];
+      for (std::size_t q = 1; q <= pieces; ++q)
+        table.count[q] += table.count[q - 1];
+      table.ids.resize(n);
+      table.fine.resize(n);
+      for (std::size_t i = lo; i < hi; ++i) {
+        const std::uint32_t at = table.count[fine[i] >> down]++;
+        table.ids[at] = buffer[i];
+        table.fine[at] = fine[i];
+      }
+      // count[q] is now the end of piece q.
+      for (std::size_t q = 0, from = 0; q < pieces; ++q) {
+        const std::size_t to = table.count[q];
+        if (to > from && !match_range(table.ids.data() + from, table.fine.data() + from, to - from,
+                                      table, singles, pairs))
+          return false;
+        from = to;
+      }
+    }
     std::array<VertexId, K> key;
     std::uint32_t ref;
     for (const auto &[f, packed] : singles) {
@@ -404,16 +482,16 @@ struct Walk {
   // threads at once (each block's visitor by one thread, in key order),
   // otherwise in order by this one.
   template <bool Parallel, class VisitorOf>
-  void chunk(std::size_t b0, std::size_t b1, Buffer &buffer, VisitorOf &&visitor) const {
+  void chunk(std::size_t b0, std::size_t b1, Buffers &buffers, VisitorOf &&visitor) const {
     const std::size_t coarse = start.size() - 1;
     const std::size_t base = start[b0];
     const VertexId lo_v = VertexId(b0 << shift);
     const VertexId hi_v = VertexId(std::min(mesh.num_vertices(), b1 << shift));
     const std::size_t mask = (std::size_t(1) << shift) - 1;
+    Buffer &buffer = buffers.packed;
+    Fine &fine = buffers.fine;
     buffer.resize(start[b1] - base);
-    // Each entry's smallest id within its coarse bucket.
-    std::vector<std::uint16_t, UninitialisedAllocator<std::uint16_t>> fine(shift ? buffer.size()
-                                                                                 : 0);
+    fine.resize(shift ? buffer.size() : 0);
 #pragma omp parallel for num_threads(parts) schedule(static, 1)
     for (int t = 0; t < parts; ++t) {
       std::vector<std::size_t> cursor(b1 - b0);
@@ -546,12 +624,13 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
                          const std::vector<std::int8_t> *signs = nullptr) {
   using W = Walk<Dim, K, WithRefs, SideOnly>;
   const W walk(mesh, signs);
-  typename W::Buffer buffer;
   const std::size_t cap =
       std::max<std::size_t>(kChunkBytes / (sizeof(typename W::Packed) + sizeof(std::uint16_t)), 1);
-  for (const auto &[b0, b1] : walk.chunks(cap))
+  const auto chunks = walk.chunks(cap);
+  auto buffers = walk.buffers_for(chunks);
+  for (const auto &[b0, b1] : chunks)
     walk.template chunk<false>(
-        b0, b1, buffer, [&](std::size_t) -> auto & { return visit; });
+        b0, b1, buffers, [&](std::size_t) -> auto & { return visit; });
 }
 
 // The same walk with the visiting shared by the threads: `visitors` is
@@ -567,12 +646,13 @@ void for_each_subsimplex_blocks(const Mesh &mesh, const Visitor &prototype,
   using W = Walk<Dim, K, WithRefs, SideOnly, IdBits>;
   const W walk(mesh, signs);
   visitors.assign((walk.start.size() - 1 + W::kBlock - 1) / W::kBlock, prototype);
-  typename W::Buffer buffer;
   const std::size_t cap =
       std::max<std::size_t>(kChunkBytes / (sizeof(typename W::Packed) + sizeof(std::uint16_t)), 1);
-  for (const auto &[b0, b1] : walk.chunks(cap))
+  const auto chunks = walk.chunks(cap);
+  auto buffers = walk.buffers_for(chunks);
+  for (const auto &[b0, b1] : chunks)
     walk.template chunk<true>(
-        b0, b1, buffer, [&](std::size_t k) -> auto & { return visitors[k]; });
+        b0, b1, buffers, [&](std::size_t k) -> auto & { return visitors[k]; });
 }
 
 template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
@@ -912,7 +992,7 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
                  std::vector<std::int8_t> *signs = nullptr) {
   // Blocks of kBlock cells, summed in block order: the same total for every
   // thread count.
-  constexpr std::size_t kBlock = std::size_t(1) << 14;
+  constexpr std::size_t kBlock = std::size_t(1) << 14, kAhead = 8;
   const std::size_t nc = mesh.num_cells(), blocks = (nc + kBlock - 1) / kBlock;
   std::vector<double> sums(blocks, 0.0);
   std::vector<std::size_t> first(blocks, std::size_t(-1));
@@ -924,9 +1004,18 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
   for (std::size_t k = 0; k < blocks; ++k) {
     double pts[(Dim + 1) * Dim];
     double total = 0;
-    for (std::size_t c = k * kBlock; c < std::min(nc, (k + 1) * kBlock); ++c) {
+    const std::size_t end = std::min(nc, (k + 1) * kBlock);
+    for (std::size_t c = k * kBlock; c < end; ++c) {
+      // The cells' vertices are scattered over the coordinates (new ones
+      // are appended), so each gather misses the core's cache: ask for a
+      // cell's points kAhead cells before they are needed.
+      if (c + kAhead < end) {
+        const VertexId *ahead = mesh.cell(CellId(c + kAhead));
+        for (int i = 0; i <= Dim; ++i)
+          __builtin_prefetch(mesh.point(ahead[i]));
+      }
       gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
-      const double v = signed_volume(pts, Dim);
+      const double v = geometry::signed_volume<Dim>(pts);
       total += std::abs(v);
       const bool bad = degenerate<Dim>(pts, v);
       if (signs && !bad)
@@ -2145,6 +2234,10 @@ void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &prog
 } // namespace bisect
 
 namespace bisect::testing {
+void set_final_walk_piece(std::size_t entries) {
+  g_match_piece = entries ? entries : kMatchPiece;
+}
+
 void use_sorted_final_walk(bool on) {
   g_sorted_final_walk = on;
 }

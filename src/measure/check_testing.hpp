@@ -1,6 +1,8 @@
 // Test hooks of the checks (not part of the installed API).
 #pragma once
 
+#include <cstddef>
+
 namespace bisect::testing {
 
 // The final check (check_refined) matches most facets by hashing within the
@@ -8,5 +10,9 @@ namespace bisect::testing {
 // defect. With `on`, it takes the sorted walk everywhere, so a test can
 // compare the two: they must give the same verdict and message.
 void use_sorted_final_walk(bool on);
+
+// The hashing splits a coarse bucket into pieces of about `entries` facets
+// (0: the default, 2048); a small value makes test meshes take the split.
+void set_final_walk_piece(std::size_t entries);
 
 } // namespace bisect::testing

@@ -19,42 +19,10 @@
 namespace bisect {
 namespace {
 
-constexpr double factorial(int n) {
-  return n <= 1 ? 1.0 : n * factorial(n - 1);
-}
+using geometry::factorial;
 
-// Determinant of a Dim x Dim matrix (row-major). Closed forms: for 4, the
-// Laplace expansion by the 2 x 2 minors of the first two rows and of the last
-// two (40 multiplications, no branches; the elimination with pivoting it
-// replaced was 15% of a 4D run). Its rounding error, a few units of
-// |a| |b| |c| |d| * 1e-16, stays far below the degeneracy threshold 1e-14 * l^4.
-template <int Dim> double determinant(std::array<double, Dim * Dim> a) {
-  static_assert(Dim >= 2 && Dim <= 4);
-  if constexpr (Dim == 4) {
-    const double *r0 = &a[0], *r1 = &a[4], *r2 = &a[8], *r3 = &a[12];
-    auto minor = [](const double *x, const double *y, int i, int j) {
-      return x[i] * y[j] - x[j] * y[i];
-    };
-    return minor(r0, r1, 0, 1) * minor(r2, r3, 2, 3) - minor(r0, r1, 0, 2) * minor(r2, r3, 1, 3) +
-           minor(r0, r1, 0, 3) * minor(r2, r3, 1, 2) + minor(r0, r1, 1, 2) * minor(r2, r3, 0, 3) -
-           minor(r0, r1, 1, 3) * minor(r2, r3, 0, 2) + minor(r0, r1, 2, 3) * minor(r2, r3, 0, 1);
-  } else if constexpr (Dim == 2) {
-    return a[0] * a[3] - a[1] * a[2];
-  } else if constexpr (Dim == 3) {
-    return a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) +
-           a[2] * (a[3] * a[7] - a[4] * a[6]);
-  }
-}
-
-// det A with A = [x1-x0, ..., xn-x0] (edge vectors as columns).
-template <int Dim> double edge_determinant(const double *verts) {
-  std::array<double, Dim * Dim> a;
-  for (int i = 0; i < Dim; ++i)
-    for (int j = 0; j < Dim; ++j)
-      a[i * Dim + j] = verts[(j + 1) * Dim + i] - verts[i];
-  return determinant<Dim>(a);
-}
-
+using geometry::determinant;
+using geometry::edge_determinant;
 using geometry::squared_distance;
 
 template <int Dim> double signed_volume_t(const double *verts) {
@@ -104,14 +72,22 @@ template <int Dim> QualitySummary quality_summary_t(const Mesh &mesh) {
     return s;
   // Blocks of cells summed in block order: the same figures for every
   // thread count.
-  constexpr std::size_t kBlock = std::size_t(1) << 14;
+  constexpr std::size_t kBlock = std::size_t(1) << 14, kAhead = 8;
   const std::size_t blocks = (nc + kBlock - 1) / kBlock;
   std::vector<double> lo(blocks, 1e300), hi(blocks, -1e300), sum(blocks, 0.0);
   const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
   for (std::size_t k = 0; k < blocks; ++k) {
     double pts[(Dim + 1) * Dim], a = 1e300, b = -1e300, total = 0;
-    for (std::size_t c = k * kBlock; c < std::min(nc, (k + 1) * kBlock); ++c) {
+    const std::size_t end = std::min(nc, (k + 1) * kBlock);
+    for (std::size_t c = k * kBlock; c < end; ++c) {
+      // A cell's vertices are scattered over the coordinates: fetch them
+      // kAhead cells early (as check.cpp's cell pass does).
+      if (c + kAhead < end) {
+        const VertexId *ahead = mesh.cell(CellId(c + kAhead));
+        for (int i = 0; i <= Dim; ++i)
+          __builtin_prefetch(mesh.point(ahead[i]));
+      }
       cell_points_t<Dim>(mesh, CellId(c), pts);
       const double q = mean_ratio_t<Dim>(pts);
       a = std::min(a, q);
