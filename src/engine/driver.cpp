@@ -9,6 +9,10 @@
 #include <cstdio>
 #include <fstream>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 namespace bisect {
 namespace {
 
@@ -139,6 +143,14 @@ run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
   // went wrong, the caller never gets a non-conforming mesh without an error.
   if (options.final_check && !options.check_every_iteration) {
     const auto t_check = std::chrono::steady_clock::now();
+#if defined(__GLIBC__)
+    // The refinement's freed scratch stays resident in malloc's heap (blocks
+    // below its mmap threshold, which glibc raises up to 32 MiB as large
+    // blocks are freed). Give those pages back before the check allocates
+    // its walk buffers, or both count in the peak (3,178,142 tets: 206 MB
+    // resident where the mesh holds 141).
+    malloc_trim(0);
+#endif
     const CheckResult c = check_refined(mesh, before);
     result.check_seconds += seconds_since(t_check);
     if (!c.ok)
