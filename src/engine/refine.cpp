@@ -139,6 +139,8 @@ public:
         logging_ = true;
     if (logging_ && splitter_)
       entities0_ = m_.entities; // what undo() puts back
+    if (logging_)
+      logged_.assign((nc0_ + 63) / 64, 0);
     try {
       std::vector<std::uint8_t> flag;
       std::vector<std::uint64_t> seen;
@@ -282,6 +284,11 @@ private:
       m_.stage.reserve(cap);
       m_.tag.reserve(cap);
       m_.generation.reserve(cap);
+      // Cell data grows in finish(), when the iteration's scratch (the
+      // midpoint table, the undo log) is largest: growing it here instead
+      // keeps its copy out of the peak.
+      for (DataArray &a : m_.cell_data)
+        a.values.reserve(cap * std::size_t(a.components));
     }
   }
 
@@ -333,7 +340,11 @@ private:
     if (g == std::numeric_limits<std::uint16_t>::max())
       throw CheckError("a cell would pass 65535 generations of bisection");
     m_.generation[c] = std::uint16_t(g + 1);
-    if (logging_) {
+    // The undo log keeps what an input cell was before its first bisection
+    // in this call: cells appended by the call are dropped by undo() anyway,
+    // and later bisections of the same cell change nothing undo() restores.
+    if (logging_ && c < nc0_ && !(logged_[c >> 6] >> (c & 63) & 1)) {
+      logged_[c >> 6] |= std::uint64_t(1) << (c & 63);
       UndoEntry u{c, {}, s, std::uint8_t(t), g};
       std::copy(x, x + N, u.x);
       log_.push_back(u);
@@ -448,6 +459,7 @@ private:
   std::vector<CellId> origin_;         // per appended cell: the input cell it descends from
   std::vector<std::uint8_t> endpoint_; // per vertex: 1 if an end of an edge bisected so far
   std::vector<UndoEntry> log_;
+  std::vector<std::uint64_t> logged_;        // per input cell, when logging: 1 once in log_
   std::unique_ptr<EntitySplitter> splitter_; // null for a mesh without entities
   std::vector<Entities> entities0_;          // the entities before, when logging
 };

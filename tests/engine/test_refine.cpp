@@ -194,6 +194,55 @@ TEST_CASE("max cells: an iteration that would pass the limit is undone exactly",
   REQUIRE_CONFORMING(m, inv);
 }
 
+TEST_CASE("max cells: a limit tripped on the last closure pass undoes cells bisected several "
+          "times",
+          "[refine][2d][3d][4d]") {
+  // The undo log keeps an input cell's first state only; a late trip has
+  // input cells bisected more than once, and appended cells bisected again.
+  for (int dim : {2, 3, 4}) {
+    INFO("dim " << dim);
+    Mesh m = generate_kuhn(dim, dim == 4 ? 2 : 4);
+    mark_mesh(m, Marking::Index);
+    m.cell_data.push_back(DataArray{"id", 1, std::vector<double>(m.num_cells())});
+    for (std::size_t c = 0; c < m.num_cells(); ++c)
+      m.cell_data[0].values[c] = double(c);
+    std::string centre = "0.3";
+    for (int d = 1; d < dim; ++d)
+      centre += ",0.3";
+    auto region =
+        parse_region(R"({"type":"sphere","center":[)" + centre + R"(],"radius":0.05})", dim, "t");
+    refine(m, select_cells(m, *region)); // a tree to restore, too
+    // Iterations until one needs at least two closure passes.
+    Mesh free_run;
+    std::vector<CellId> selected;
+    for (int it = 0; it < 12; ++it) {
+      free_run = m;
+      selected = select_cells(m, *region);
+      if (refine(free_run, selected).closure_passes >= 2)
+        break;
+      m = free_run;
+    }
+    const Mesh before = m;
+    REQUIRE(free_run.num_cells() > m.num_cells() + selected.size() + 1);
+    RefineLimits limits;
+    limits.max_cells = free_run.num_cells() - 1;
+    const RefineResult r = refine(m, selected, limits);
+    REQUIRE(r.limit_reached);
+    REQUIRE(r.bisections > 0);
+    CHECK(m.cells == before.cells);
+    CHECK(m.coords == before.coords);
+    CHECK(m.tag == before.tag);
+    CHECK(m.stage == before.stage);
+    CHECK(m.generation == before.generation);
+    CHECK(m.parent_edge == before.parent_edge);
+    CHECK(m.level == before.level);
+    REQUIRE(m.cell_data.size() == 1);
+    CHECK(m.cell_data[0].values == before.cell_data[0].values);
+    const Invariants inv = measure_invariants(before);
+    REQUIRE_CONFORMING(m, inv);
+  }
+}
+
 TEST_CASE("32-bit ids: running out of vertex ids stops cleanly", "[refine][2d]") {
   Mesh m = generate_kuhn(2, 4);
   mark_mesh(m, Marking::Index);
