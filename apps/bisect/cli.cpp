@@ -125,8 +125,7 @@ void add_format_option(CLI::App *cmd, std::string &format) {
 }
 
 void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions &options) {
-  encode_state(mesh);
-  write_mesh_file(outputs.file(h), outputs.name(h), mesh, options);
+  write_mesh_file_with_state(outputs.file(h), outputs.name(h), mesh, options);
 }
 
 // "<output stem>.t<value>.vtu" beside the output.

@@ -1,6 +1,8 @@
 // Format dispatch by extension, input checks shared by all readers, and the
 // write-to-temporary-then-rename rule for output (STYLE.md §6).
 #include "bisect/io.hpp"
+#include "state_arrays.hpp"
+#include "vtu_write.hpp"
 
 #include "bisect/check.hpp"
 #include "bisect/state.hpp"
@@ -65,10 +67,10 @@ std::string strip_prefix(const std::string &what, const std::string &prefix) {
   return what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what;
 }
 
-void write_as(Format format, const std::string &path, const Mesh &mesh,
-              const WriteOptions &options) {
+void write_as(Format format, const std::string &path, const Mesh &mesh, const WriteOptions &options,
+              const StateArrays *state = nullptr) {
   if (format == Format::Vtu)
-    write_vtu(path, mesh, options.compression);
+    write_vtu_with_state(path, mesh, options.compression, state);
   else
     write_msh(path, mesh);
 }
@@ -196,16 +198,52 @@ static Format format_named(const std::string &name, const std::string &format) {
   throw InputError(name, "unknown format '" + format + "' (expected vtu or msh)");
 }
 
-void write_mesh_file(const std::string &file, const std::string &name, const Mesh &mesh,
-                     const WriteOptions &options) {
+namespace {
+
+void write_file_as(const std::string &file, const std::string &name, const Mesh &mesh,
+                   const WriteOptions &options, const StateArrays *state) {
   const Format format = format_named(name, options.format);
   try {
-    write_as(format, file, mesh, options);
+    write_as(format, file, mesh, options, state);
   } catch (const InputError &e) {
     throw InputError(name, strip_prefix(e.what(), file + ": "));
   } catch (const CheckError &e) {
     throw CheckError(name + ": " + strip_prefix(e.what(), file + ": "));
   }
+}
+
+} // namespace
+
+void write_mesh_file(const std::string &file, const std::string &name, const Mesh &mesh,
+                     const WriteOptions &options) {
+  write_file_as(file, name, mesh, options, nullptr);
+}
+
+void write_mesh_file_with_state(const std::string &file, const std::string &name, Mesh &mesh,
+                                const WriteOptions &options) {
+  if (!mesh.marked()) {
+    write_mesh_file(file, name, mesh, options);
+    return;
+  }
+  if (format_named(name, options.format) != Format::Vtu || !can_stream_state(mesh)) {
+    encode_state(mesh);
+    try {
+      write_mesh_file(file, name, mesh, options);
+    } catch (...) {
+      strip_state(mesh);
+      throw;
+    }
+    strip_state(mesh);
+    return;
+  }
+  const StateArrays state = stream_state(mesh);
+  try {
+    write_file_as(file, name, mesh, options, &state);
+  } catch (...) {
+    unstream_state(mesh, state);
+    throw;
+  }
+  unstream_state(mesh, state);
 }
 
 void check_output_format(const std::string &name, int dim, const std::string &format_name) {
@@ -233,18 +271,10 @@ Mesh load_mesh(const std::string &path, const LoadProgress &progress, InputFacts
 }
 
 void save_mesh(const std::string &path, Mesh &mesh, const WriteOptions &options) {
-  if (!mesh.marked()) {
-    write_mesh(path, mesh, options);
-    return;
-  }
-  encode_state(mesh);
-  try {
-    write_mesh(path, mesh, options);
-  } catch (...) {
-    strip_state(mesh);
-    throw;
-  }
-  strip_state(mesh);
+  OutputSet out({}, true);
+  const int h = out.add(path);
+  write_mesh_file_with_state(out.file(h), path, mesh, options);
+  out.commit();
 }
 
 void write_mesh(const std::string &path, const Mesh &mesh, const WriteOptions &options) {

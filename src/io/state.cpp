@@ -1,5 +1,6 @@
 // The bisection state in files: cell arrays bisect:* (README, "Files").
 #include "bisect/state.hpp"
+#include "state_arrays.hpp"
 
 #include "core/names.hpp"
 
@@ -101,6 +102,60 @@ void encode_state(Mesh &mesh) {
     }
     encode_tree(mesh);
   }
+}
+
+bool StateArrays::hides(const std::string &name) const {
+  for (const char *n :
+       {kStateArray, kMarkingArray, kGenerationArray, kParentAArray, kParentBArray, kLevelArray})
+    if (name == n)
+      return true;
+  return false;
+}
+
+bool can_stream_state(const Mesh &mesh) {
+  return mesh.marked() && mesh.marking != Marking::Explicit;
+}
+
+StateArrays stream_state(Mesh &mesh) {
+  const int nv = mesh.dim + 1;
+  const std::size_t nc = mesh.num_cells();
+  StateArrays out;
+  out.flipped.assign(nc, false);
+  for (std::size_t c = 0; c < nc; ++c)
+    out.flipped[c] = orient_positively(mesh, mesh.cell(CellId(c)));
+  int swapped[5] = {1, 0, 2, 3, 4};
+  const int swapped_rank = permutation_rank(swapped, nv);
+  const Mesh *m = &mesh;
+  const std::vector<bool> *flipped = &out.flipped;
+  out.cells.push_back({kStateArray, 1, ValueType::Int32, [=](std::size_t c) {
+                         return double(
+                             pack_state((*flipped)[c] ? swapped_rank : 0, m->stage[c], m->tag[c]));
+                       }});
+  const double marking = double(int(mesh.marking));
+  out.cells.push_back({kMarkingArray, 1, ValueType::Int32, [=](std::size_t) { return marking; }});
+  // The tree (encode_tree): only when sized for the mesh.
+  if (mesh.has_tree()) {
+    out.cells.push_back({kGenerationArray, 1, ValueType::UInt16,
+                         [=](std::size_t c) { return double(m->generation[c]); }});
+    auto parent = [=](int end) {
+      return [=](std::size_t v) {
+        const VertexId p = m->parent_edge[2 * v + std::size_t(end)];
+        return p == kNoVertex ? -1.0 : double(p);
+      };
+    };
+    out.points.push_back({kParentAArray, 1, ValueType::Int32, parent(0)});
+    out.points.push_back({kParentBArray, 1, ValueType::Int32, parent(1)});
+    if (mesh.level.size() == mesh.num_vertices())
+      out.points.push_back(
+          {kLevelArray, 1, ValueType::UInt16, [=](std::size_t v) { return double(m->level[v]); }});
+  }
+  return out;
+}
+
+void unstream_state(Mesh &mesh, const StateArrays &state) {
+  for (std::size_t c = 0; c < mesh.num_cells() && c < state.flipped.size(); ++c)
+    if (state.flipped[c])
+      std::swap(mesh.cell(CellId(c))[0], mesh.cell(CellId(c))[1]);
 }
 
 void strip_state(Mesh &mesh) {

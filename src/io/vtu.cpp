@@ -457,8 +457,13 @@ Mesh read_vtu(const std::string &path) {
 }
 
 void write_vtu(const std::string &path, const Mesh &mesh, Compression compression) {
+  write_vtu_with_state(path, mesh, compression, nullptr);
+}
+
+void write_vtu_with_state(const std::string &path, const Mesh &mesh, Compression compression,
+                          const StateArrays *state) {
   check_mesh_for_writing(path, mesh);
-  write_vtu_native(path, mesh, compression);
+  write_vtu_native(path, mesh, compression, 1, state);
 }
 
 } // namespace bisect

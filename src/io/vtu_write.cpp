@@ -406,9 +406,11 @@ void write_typed(Writer &w, VtuCompression compression, int level, const DataArr
 // padded copy of every cell array would add 8 bytes per cell and array to
 // the write's memory peak).
 void write_cell_arrays_with_entities(Writer &w, VtuCompression compression, int level,
-                                     const Mesh &mesh) {
+                                     const Mesh &mesh, const StateArrays *state) {
   std::vector<const DataArray *> firsts; // one per name, cells' arrays first
   auto note = [&](const DataArray &a) {
+    if (state && state->hides(a.name))
+      return;
     for (const DataArray *f : firsts)
       if (f->name == a.name)
         return;
@@ -456,6 +458,19 @@ void write_cell_arrays_with_entities(Writer &w, VtuCompression compression, int 
                    return s.own ? s.own->values[i - s.first] : pad;
                  });
   }
+  // The state's arrays (integers): the cells' values, then 0 for every
+  // entity, as a stored state array would be padded.
+  if (state) {
+    const std::size_t ncells = mesh.num_cells();
+    std::size_t rows = ncells;
+    for (const Entities &b : mesh.entities)
+      rows += b.size();
+    for (const ArraySource &a : state->cells) {
+      const std::size_t k = std::size_t(a.components);
+      write_values(w, compression, level, a.name, a.components, rows * k, a.type, false,
+                   [&](std::size_t i) { return i < ncells * k ? a.value(i) : 0.0; });
+    }
+  }
 }
 
 // Physical names as field data in meshio's convention: an Int32 array named
@@ -471,7 +486,7 @@ void write_physical_names(Writer &w, VtuCompression compression, int level, cons
 } // namespace
 
 void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression compression,
-                      int level) {
+                      int level, const StateArrays *state) {
   const std::size_t nv = mesh.num_vertices(), ncells = mesh.num_cells();
   const int dim = mesh.dim, nvc = dim + 1;
   // Tagged entities are cells of the grid after the volume cells.
@@ -507,17 +522,29 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
       plane_z = &a;
       continue;
     }
+    if (state && state->hides(a.name))
+      continue;
     write_typed(w, compression, level, a, false);
   }
+  if (state)
+    for (const ArraySource &a : state->points)
+      write_values(w, compression, level, a.name, a.components, nv * std::size_t(a.components),
+                   a.type, false, a.value);
   if (dim == 4)
     write_array<double>(w, compression, level, "t", 1, nv,
                         [&](std::size_t v) { return mesh.coords[v * 4 + 3]; });
   w.text("      </PointData>\n      <CellData>\n");
-  if (nentities == 0)
+  if (nentities == 0) {
     for (const DataArray &a : mesh.cell_data)
-      write_typed(w, compression, level, a, true);
-  else
-    write_cell_arrays_with_entities(w, compression, level, mesh);
+      if (!state || !state->hides(a.name))
+        write_typed(w, compression, level, a, true);
+    if (state)
+      for (const ArraySource &a : state->cells)
+        write_values(w, compression, level, a.name, a.components,
+                     ncells * std::size_t(a.components), a.type, false, a.value);
+  } else {
+    write_cell_arrays_with_entities(w, compression, level, mesh, state);
+  }
   w.text("      </CellData>\n      <Points>\n");
   write_array<double>(w, compression, level, "Points", 3, 3 * nv, [&](std::size_t i) {
     const std::size_t v = i / 3, k = i % 3;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "bisect/io.hpp"
+#include "state_arrays.hpp"
 
 #include <string>
 
@@ -16,7 +17,13 @@ using VtuCompression = Compression;
 // pentatopes as 5-vertex poly-vertex cells with the point array `t` and
 // field data SpatialDimension = 4; cell arrays holding only 32-bit integers
 // are Int32, other arrays Float64.
+// With `state` (stream_state), the bisection state's arrays are written from
+// it, and stored arrays it hides are not.
 void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression compression,
-                      int level = 1);
+                      int level = 1, const StateArrays *state = nullptr);
+
+// write_vtu (io.hpp) with the state's arrays made while writing.
+void write_vtu_with_state(const std::string &path, const Mesh &mesh, Compression compression,
+                          const StateArrays *state);
 
 } // namespace bisect

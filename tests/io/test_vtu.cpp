@@ -1,6 +1,11 @@
 // Reading and writing .vtu files, and the checks read_mesh/write_mesh make
 // before any format-specific code runs.
+#include "bisect/generate.hpp"
 #include "bisect/io.hpp"
+#include "bisect/mark.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/region.hpp"
+#include "bisect/state.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -569,4 +574,61 @@ TEST_CASE("io: write_mesh replaces an existing file and leaves no temporary", "[
   write_mesh(dir.file("m.vtu"), two_tets());
   CHECK(dir.entries() == std::vector<std::string>{"m.vtu"});
   require_same(two_tets(), read_mesh(dir.file("m.vtu")));
+}
+
+TEST_CASE("vtu: the bisection state made while writing gives the same file as encode_state",
+          "[vtu][state][2d][3d][4d]") {
+  // write_mesh_file_with_state streams the state's arrays into the .vtu
+  // writer; the bytes must be those of encode_state + write_mesh_file, with
+  // and without a tree, with tagged entities, stale stored state arrays and
+  // every compression, and the mesh must come back unchanged.
+  TempDir dir;
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  for (const char *name : {"square-tagged.msh", "box-tagged.msh"}) {
+    Mesh m = load_mesh(testing::data_path(name));
+    mark_mesh(m, Marking::Index);
+    auto r = parse_region(m.dim == 2 ? R"({"type":"sphere","center":[0.3,0.4],"radius":0.3})"
+                                     : R"({"type":"sphere","center":[0.3,0.4,0.5],"radius":0.3})",
+                          m.dim, "t");
+    refine(m, select_cells(m, *r));
+    REQUIRE(!m.entities.empty());
+    REQUIRE(m.has_tree());
+    meshes.emplace_back(name, m);
+    Mesh untreed = m;
+    untreed.clear_tree();
+    untreed.cell_data.push_back(
+        DataArray{kGenerationArray, 1, std::vector<double>(m.num_cells(), 7.0)}); // stale
+    meshes.emplace_back(std::string(name) + " without a tree", std::move(untreed));
+  }
+  {
+    Mesh m = generate_kuhn(4, 2);
+    mark_mesh(m, Marking::Longest);
+    auto r = parse_region(R"({"type":"sphere","center":[0.3,0.4,0.5,0.6],"radius":0.3})", 4, "t");
+    refine(m, select_cells(m, *r));
+    m.cell_data.push_back(DataArray{kStateArray, 1, std::vector<double>(m.num_cells(), 3.0)});
+    meshes.emplace_back("4D longest", std::move(m));
+  }
+  auto bytes = [](const std::string &path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  for (auto &[what, mesh] : meshes)
+    for (Compression c : {Compression::None, Compression::Zlib, Compression::Lz4}) {
+      INFO(what << ", compression " << int(c));
+      WriteOptions options;
+      options.compression = c;
+      Mesh encoded = mesh;
+      encode_state(encoded);
+      write_mesh_file(dir.file("encoded.vtu"), "encoded.vtu", encoded, options);
+      const Mesh before = mesh;
+      write_mesh_file_with_state(dir.file("streamed.vtu"), "streamed.vtu", mesh, options);
+      CHECK(bytes(dir.file("streamed.vtu")) == bytes(dir.file("encoded.vtu")));
+      CHECK(testing::mesh_difference(mesh, before).empty());
+      CHECK(mesh.stage == before.stage);
+      CHECK(mesh.tag == before.tag);
+      // And it reads back as the mesh, state included.
+      Mesh back = load_mesh(dir.file("streamed.vtu"));
+      CHECK(back.marked());
+      CHECK(back.num_cells() == mesh.num_cells());
+    }
 }
