@@ -103,7 +103,8 @@ constexpr auto kNetwork = [] {
 }();
 
 // The smallest and second smallest of a cell's N ids.
-template <int N> std::pair<VertexId, VertexId> two_smallest(const VertexId *cell) {
+template <int N>
+[[gnu::always_inline]] inline std::pair<VertexId, VertexId> two_smallest(const VertexId *cell) {
   VertexId first = std::min(cell[0], cell[1]), second = std::max(cell[0], cell[1]);
   for (int i = 2; i < N; ++i) {
     second = std::min(second, std::max(first, cell[i]));
@@ -135,6 +136,8 @@ bool g_sorted_final_walk = false;
 // The hashing path's piece size (see match_bucket); a test sets it small.
 constexpr std::size_t kMatchPiece = 2048;
 std::size_t g_match_piece = kMatchPiece;
+// A walk's buffer budget set by a test (0: the walks' own).
+std::size_t g_chunk_bytes = 0;
 
 // An allocator whose resize() leaves new elements uninitialised (for trivial
 // types): the walk's buffer is written in full before it is read, and
@@ -176,10 +179,15 @@ using UIntFor =
                        std::conditional_t<Bits <= 64, std::uint64_t, unsigned __int128>>;
 
 // The walk in pieces. The sub-simplices are grouped by their smallest id v
-// in two levels: coarse buckets of 2^shift consecutive ids (at most
-// kStreams of them, so that appending to all of them at once stays in the
-// cache), then, one coarse bucket at a time and within the cache, fine
-// buckets of one id each. A single scatter into one bucket per vertex put
+// in two levels: coarse buckets of 2^shift consecutive ids, then, one coarse
+// bucket at a time and within the cache, fine buckets of one id each. There
+// are at least kStreams coarse buckets, more when that leaves more than
+// about kBucketEntries sub-simplices in one: a chunk appends to its coarse
+// buckets all at once, which stays in the cache while a chunk holds no more
+// than a few thousand of them, and a coarse bucket is visited within the
+// core's cache only while it is small (with the count fixed at 1024, a
+// 26 M-tet mesh put 180,000 facets in each, and the final check spent twice
+// as long per facet as on a 3 M-tet one). A single scatter into one bucket per vertex put
 // each write at a random place in a buffer far larger than the cache, and a
 // cache miss per sub-simplex was most of the final check's time.
 //
@@ -197,6 +205,7 @@ struct Walk {
   static constexpr int kIdBits = IdBits;
   static_assert(IdBits == 32 || SideOnly);
   static constexpr std::size_t kStreams = 1024;
+  static constexpr std::size_t kBucketEntries = 16384;
   static constexpr std::size_t kBlock = 16;               // coarse buckets per visitor (see chunk)
   static constexpr std::size_t kCellsPerThread = 1 << 16; // fewer cells: fewer threads
   using Packed = UIntFor<kIdBits *(K - 1) + kRefBits>;
@@ -208,6 +217,13 @@ struct Walk {
   struct Buffers {
     Buffer packed;
     Fine fine;
+    // Facet walks over several chunks: per cell, the chunks of its smallest
+    // and second smallest ids (the only chunks its facets go to), found by
+    // the first chunk's scan; later scans read these 2 bytes instead of the
+    // cell's ids. Each chunk rescanned all cells, and on a 26 M-tet mesh
+    // (11 chunks) that was a sixth of the final check. Empty: not used.
+    std::vector<std::uint8_t, UninitialisedAllocator<std::uint8_t>> pairs;
+    std::vector<std::uint8_t> chunk_of; // per coarse bucket
   };
 
   const Mesh &mesh;
@@ -238,7 +254,8 @@ struct Walk {
       throw ResourceError("", "mesh too large for the 32-bit sub-simplex references of the checks");
     if (SideOnly && nv >= (std::size_t(1) << kIdBits))
       throw ResourceError("", "mesh too large for the 31-bit vertex ids of the final check");
-    while (shift < 16 && (nv >> shift) > kStreams)
+    const std::size_t buckets = std::max(kStreams, nc * std::size_t(M) / kBucketEntries);
+    while (shift < 16 && (nv >> shift) > buckets)
       ++shift;
     const std::size_t coarse = nv ? ((nv - 1) >> shift) + 1 : 0;
     parts = int(std::clamp<std::size_t>(nc / kCellsPerThread, 1, std::size_t(threads())));
@@ -292,6 +309,13 @@ struct Walk {
     buffers.packed.reserve(most);
     if (shift)
       buffers.fine.reserve(most);
+    if (K == Dim && WithRefs && chunks.size() > 1 && chunks.size() < 256) {
+      buffers.pairs.resize(2 * mesh.num_cells());
+      buffers.chunk_of.resize(start.size() - 1);
+      for (std::size_t i = 0; i < chunks.size(); ++i)
+        std::fill(buffers.chunk_of.begin() + std::ptrdiff_t(chunks[i].first),
+                  buffers.chunk_of.begin() + std::ptrdiff_t(chunks[i].second), std::uint8_t(i));
+    }
     return buffers;
   }
 
@@ -481,8 +505,10 @@ struct Walk {
   // (k + 1) * kBlock); with Parallel the blocks are visited by several
   // threads at once (each block's visitor by one thread, in key order),
   // otherwise in order by this one.
+  // `index`: the chunk's place in the walk's chunks (0 first).
   template <bool Parallel, class VisitorOf>
-  void chunk(std::size_t b0, std::size_t b1, Buffers &buffers, VisitorOf &&visitor) const {
+  void chunk(std::size_t b0, std::size_t b1, Buffers &buffers, VisitorOf &&visitor,
+             std::size_t index) const {
     const std::size_t coarse = start.size() - 1;
     const std::size_t base = start[b0];
     const VertexId lo_v = VertexId(b0 << shift);
@@ -509,7 +535,14 @@ struct Walk {
           // the sort's parity (see facet_side).
           // Most cells have no facet in a chunk: the two smallest ids
           // decide that, without the sort.
+          if (!buffers.pairs.empty() && index > 0 && buffers.pairs[2 * c] != std::uint8_t(index) &&
+              buffers.pairs[2 * c + 1] != std::uint8_t(index))
+            continue;
           const auto [first, second] = two_smallest<Dim + 1>(cell);
+          if (!buffers.pairs.empty() && index == 0) {
+            buffers.pairs[2 * c] = buffers.chunk_of[first >> shift];
+            buffers.pairs[2 * c + 1] = buffers.chunk_of[second >> shift];
+          }
           if (first >= hi_v || second < lo_v)
             continue;
           std::array<std::uint64_t, Dim + 1> keys;
@@ -625,12 +658,15 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
   using W = Walk<Dim, K, WithRefs, SideOnly>;
   const W walk(mesh, signs);
   const std::size_t cap =
-      std::max<std::size_t>(kChunkBytes / (sizeof(typename W::Packed) + sizeof(std::uint16_t)), 1);
+      std::max<std::size_t>((g_chunk_bytes ? g_chunk_bytes : kChunkBytes) /
+                                (sizeof(typename W::Packed) + sizeof(std::uint16_t)),
+                            1);
   const auto chunks = walk.chunks(cap);
   auto buffers = walk.buffers_for(chunks);
-  for (const auto &[b0, b1] : chunks)
+  for (std::size_t i = 0; i < chunks.size(); ++i)
     walk.template chunk<false>(
-        b0, b1, buffers, [&](std::size_t) -> auto & { return visit; });
+        chunks[i].first, chunks[i].second, buffers, [&](std::size_t) -> auto & { return visit; },
+        i);
 }
 
 // The same walk with the visiting shared by the threads: `visitors` is
@@ -648,12 +684,15 @@ void for_each_subsimplex_blocks(const Mesh &mesh, const Visitor &prototype,
   const W walk(mesh, signs);
   visitors.assign((walk.start.size() - 1 + W::kBlock - 1) / W::kBlock, prototype);
   const std::size_t cap =
-      std::max<std::size_t>(chunk_bytes / (sizeof(typename W::Packed) + sizeof(std::uint16_t)), 1);
+      std::max<std::size_t>((g_chunk_bytes ? g_chunk_bytes : chunk_bytes) /
+                                (sizeof(typename W::Packed) + sizeof(std::uint16_t)),
+                            1);
   const auto chunks = walk.chunks(cap);
   auto buffers = walk.buffers_for(chunks);
-  for (const auto &[b0, b1] : chunks)
+  for (std::size_t i = 0; i < chunks.size(); ++i)
     walk.template chunk<true>(
-        b0, b1, buffers, [&](std::size_t k) -> auto & { return visitors[k]; });
+        chunks[i].first, chunks[i].second,
+        buffers, [&](std::size_t k) -> auto & { return visitors[k]; }, i);
 }
 
 template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
@@ -2243,6 +2282,10 @@ void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &prog
 } // namespace bisect
 
 namespace bisect::testing {
+void set_walk_chunk_bytes(std::size_t bytes) {
+  g_chunk_bytes = bytes;
+}
+
 void set_final_walk_piece(std::size_t entries) {
   g_match_piece = entries ? entries : kMatchPiece;
 }

@@ -634,16 +634,21 @@ TEST_CASE("final check: matching facets by hashing gives the sorted walk's verdi
       // Hashing whole coarse buckets, hashing them in pieces of about 16
       // facets (what a 4D mesh of millions of cells does with 2,048), and
       // the sorted walk.
+      // Each also in chunks of 64 KiB (tens of chunks, the per-cell chunk
+      // pairs in use) as well as in one.
       for (int way : {0, 1, 2})
-        for (int t : {1, 2, 3}) {
-          testing::use_sorted_final_walk(way == 2);
-          testing::set_final_walk_piece(way == 1 ? 16 : std::size_t(1) << 30);
-          set_threads(t);
-          const CheckResult r = check_refined(mesh, original);
-          verdicts.push_back(r.ok ? "ok" : r.failure);
-        }
+        for (std::size_t chunk : {std::size_t(0), std::size_t(64) << 10})
+          for (int t : {1, 2, 3}) {
+            testing::use_sorted_final_walk(way == 2);
+            testing::set_final_walk_piece(way == 1 ? 16 : std::size_t(1) << 30);
+            testing::set_walk_chunk_bytes(chunk);
+            set_threads(t);
+            const CheckResult r = check_refined(mesh, original);
+            verdicts.push_back(r.ok ? "ok" : r.failure);
+          }
       testing::use_sorted_final_walk(false);
       testing::set_final_walk_piece(0);
+      testing::set_walk_chunk_bytes(0);
       set_threads(0);
       CHECK((what == "honest") == (verdicts[0] == "ok"));
       for (const std::string &v : verdicts)
