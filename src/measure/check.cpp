@@ -300,6 +300,13 @@ struct Walk {
     return out;
   }
 
+  // How many entries a buffer budget of `bytes` holds (a test's budget,
+  // when set, instead).
+  static std::size_t entries_in(std::size_t bytes) {
+    return std::max<std::size_t>(
+        (g_chunk_bytes ? g_chunk_bytes : bytes) / (sizeof(Packed) + sizeof(std::uint16_t)), 1);
+  }
+
   // The buffers for the largest of `chunks`.
   Buffers buffers_for(const std::vector<std::pair<std::size_t, std::size_t>> &chunks) const {
     std::size_t most = 0;
@@ -657,11 +664,7 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
                          const std::vector<std::int8_t> *signs = nullptr) {
   using W = Walk<Dim, K, WithRefs, SideOnly>;
   const W walk(mesh, signs);
-  const std::size_t cap =
-      std::max<std::size_t>((g_chunk_bytes ? g_chunk_bytes : kChunkBytes) /
-                                (sizeof(typename W::Packed) + sizeof(std::uint16_t)),
-                            1);
-  const auto chunks = walk.chunks(cap);
+  const auto chunks = walk.chunks(W::entries_in(kChunkBytes));
   auto buffers = walk.buffers_for(chunks);
   for (std::size_t i = 0; i < chunks.size(); ++i)
     walk.template chunk<false>(
@@ -683,11 +686,7 @@ void for_each_subsimplex_blocks(const Mesh &mesh, const Visitor &prototype,
   using W = Walk<Dim, K, WithRefs, SideOnly, IdBits>;
   const W walk(mesh, signs);
   visitors.assign((walk.start.size() - 1 + W::kBlock - 1) / W::kBlock, prototype);
-  const std::size_t cap =
-      std::max<std::size_t>((g_chunk_bytes ? g_chunk_bytes : chunk_bytes) /
-                                (sizeof(typename W::Packed) + sizeof(std::uint16_t)),
-                            1);
-  const auto chunks = walk.chunks(cap);
+  const auto chunks = walk.chunks(W::entries_in(chunk_bytes));
   auto buffers = walk.buffers_for(chunks);
   for (std::size_t i = 0; i < chunks.size(); ++i)
     walk.template chunk<true>(
@@ -1046,14 +1045,8 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
     double total = 0;
     const std::size_t end = std::min(nc, (k + 1) * kBlock);
     for (std::size_t c = k * kBlock; c < end; ++c) {
-      // The cells' vertices are scattered over the coordinates (new ones
-      // are appended), so each gather misses the core's cache: ask for a
-      // cell's points kAhead cells before they are needed.
-      if (c + kAhead < end) {
-        const VertexId *ahead = mesh.cell(CellId(c + kAhead));
-        for (int i = 0; i <= Dim; ++i)
-          __builtin_prefetch(mesh.point(ahead[i]));
-      }
+      if (c + kAhead < end)
+        geometry::prefetch_points<Dim>(mesh, CellId(c + kAhead));
       gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
       const double v = geometry::signed_volume<Dim>(pts);
       total += std::abs(v);

@@ -81,13 +81,8 @@ template <int Dim> QualitySummary quality_summary_t(const Mesh &mesh) {
     double pts[(Dim + 1) * Dim], a = 1e300, b = -1e300, total = 0;
     const std::size_t end = std::min(nc, (k + 1) * kBlock);
     for (std::size_t c = k * kBlock; c < end; ++c) {
-      // A cell's vertices are scattered over the coordinates: fetch them
-      // kAhead cells early (as check.cpp's cell pass does).
-      if (c + kAhead < end) {
-        const VertexId *ahead = mesh.cell(CellId(c + kAhead));
-        for (int i = 0; i <= Dim; ++i)
-          __builtin_prefetch(mesh.point(ahead[i]));
-      }
+      if (c + kAhead < end)
+        geometry::prefetch_points<Dim>(mesh, CellId(c + kAhead));
       cell_points_t<Dim>(mesh, CellId(c), pts);
       const double q = mean_ratio_t<Dim>(pts);
       a = std::min(a, q);
