@@ -69,23 +69,34 @@ bool permutation_of_rank(int rank, int k, int *p) {
   return true;
 }
 
+// The state's two cell arrays (bisect:state, bisect:marking) as sources,
+// after orienting every cell positively; `flipped` records the swaps.
+static void state_sources(Mesh &mesh, std::vector<bool> &flipped, std::vector<ArraySource> &cells) {
+  const std::size_t nc = mesh.num_cells();
+  flipped.assign(nc, false);
+  for (std::size_t c = 0; c < nc; ++c)
+    flipped[c] = orient_positively(mesh, mesh.cell(CellId(c)));
+  int swapped[5] = {1, 0, 2, 3, 4};
+  const int swapped_rank = permutation_rank(swapped, mesh.dim + 1);
+  const Mesh *m = &mesh;
+  const std::vector<bool> *flips = &flipped;
+  cells.push_back({kStateArray, 1, ValueType::Int32, [=](std::size_t c) {
+                     return double(
+                         pack_state((*flips)[c] ? swapped_rank : 0, m->stage[c], m->tag[c]));
+                   }});
+  const double marking = double(int(mesh.marking));
+  cells.push_back({kMarkingArray, 1, ValueType::Int32, [=](std::size_t) { return marking; }});
+}
+
 void encode_state(Mesh &mesh) {
   const int n = mesh.dim, nv = n + 1;
   const std::size_t nc = mesh.num_cells();
-  DataArray state{kStateArray, 1, std::vector<double>(mesh.marked() ? nc : 0)};
-  state.type = ValueType::Int32;
-  int swapped[5] = {1, 0, 2, 3, 4};
-  const int swapped_rank = permutation_rank(swapped, nv);
-  for (std::size_t c = 0; c < nc; ++c) {
-    const bool flip = orient_positively(mesh, mesh.cell(CellId(c)));
-    if (mesh.marked())
-      state.values[c] = double(pack_state(flip ? swapped_rank : 0, mesh.stage[c], mesh.tag[c]));
-  }
+  std::vector<bool> flipped;
+  std::vector<ArraySource> sources;
+  state_sources(mesh, flipped, sources);
   if (mesh.marked()) {
-    set_array(mesh.cell_data, std::move(state));
-    DataArray marking{kMarkingArray, 1, std::vector<double>(nc, double(int(mesh.marking)))};
-    marking.type = ValueType::Int32;
-    set_array(mesh.cell_data, std::move(marking));
+    for (const ArraySource &a : sources)
+      set_array(mesh.cell_data, materialize(a, nc));
     if (mesh.marking == Marking::Explicit) {
       const int ne = nv * n / 2;
       DataArray rank{kEdgeRankArray, ne, std::vector<double>(nc * ne, -1.0)};
@@ -117,38 +128,10 @@ bool can_stream_state(const Mesh &mesh) {
 }
 
 StateArrays stream_state(Mesh &mesh) {
-  const int nv = mesh.dim + 1;
-  const std::size_t nc = mesh.num_cells();
   StateArrays out;
-  out.flipped.assign(nc, false);
-  for (std::size_t c = 0; c < nc; ++c)
-    out.flipped[c] = orient_positively(mesh, mesh.cell(CellId(c)));
-  int swapped[5] = {1, 0, 2, 3, 4};
-  const int swapped_rank = permutation_rank(swapped, nv);
-  const Mesh *m = &mesh;
-  const std::vector<bool> *flipped = &out.flipped;
-  out.cells.push_back({kStateArray, 1, ValueType::Int32, [=](std::size_t c) {
-                         return double(
-                             pack_state((*flipped)[c] ? swapped_rank : 0, m->stage[c], m->tag[c]));
-                       }});
-  const double marking = double(int(mesh.marking));
-  out.cells.push_back({kMarkingArray, 1, ValueType::Int32, [=](std::size_t) { return marking; }});
-  // The tree (encode_tree): only when sized for the mesh.
-  if (mesh.has_tree()) {
-    out.cells.push_back({kGenerationArray, 1, ValueType::UInt16,
-                         [=](std::size_t c) { return double(m->generation[c]); }});
-    auto parent = [=](int end) {
-      return [=](std::size_t v) {
-        const VertexId p = m->parent_edge[2 * v + std::size_t(end)];
-        return p == kNoVertex ? -1.0 : double(p);
-      };
-    };
-    out.points.push_back({kParentAArray, 1, ValueType::Int32, parent(0)});
-    out.points.push_back({kParentBArray, 1, ValueType::Int32, parent(1)});
-    if (mesh.level.size() == mesh.num_vertices())
-      out.points.push_back(
-          {kLevelArray, 1, ValueType::UInt16, [=](std::size_t v) { return double(m->level[v]); }});
-  }
+  state_sources(mesh, out.flipped, out.cells);
+  if (mesh.has_tree())
+    tree_sources(mesh, out.cells, out.points);
   return out;
 }
 

@@ -38,6 +38,13 @@ bool can_stream_state(const Mesh &mesh);
 // demand (the mesh must stay unchanged while they are used). The writer
 // skips stored arrays of the same names, as encode_state replaces them.
 StateArrays stream_state(Mesh &mesh);
+// The tree's arrays (bisect:generation; bisect:parent_a, bisect:parent_b
+// and, when sized for the mesh, bisect:level) as sources, appended to
+// `cells` and `points`; encode_tree and stream_state share them.
+void tree_sources(const Mesh &mesh, std::vector<ArraySource> &cells,
+                  std::vector<ArraySource> &points);
+// A source's values as a stored array of `rows` tuples.
+DataArray materialize(const ArraySource &source, std::size_t rows);
 // Puts the tuples back as they were before stream_state.
 void unstream_state(Mesh &mesh, const StateArrays &state);
 

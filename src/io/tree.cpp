@@ -2,6 +2,7 @@
 // arrays bisect:parent_a, bisect:parent_b (state.hpp, ALGORITHMS.md §10).
 // One component each, so that every converter keeps them.
 #include "bisect/state.hpp"
+#include "state_arrays.hpp"
 
 #include "core/names.hpp"
 
@@ -56,34 +57,45 @@ void check_integers(const Mesh &mesh, const DataArray &a, std::size_t count, dou
 
 } // namespace
 
+void tree_sources(const Mesh &mesh, std::vector<ArraySource> &cells,
+                  std::vector<ArraySource> &points) {
+  const Mesh *m = &mesh;
+  cells.push_back({kGenerationArray, 1, ValueType::UInt16,
+                   [=](std::size_t c) { return double(m->generation[c]); }});
+  auto parent = [=](int end) {
+    return [=](std::size_t v) {
+      const VertexId p = m->parent_edge[2 * v + std::size_t(end)];
+      return p == kNoVertex ? -1.0 : double(p);
+    };
+  };
+  points.push_back({kParentAArray, 1, ValueType::Int32, parent(0)});
+  points.push_back({kParentBArray, 1, ValueType::Int32, parent(1)});
+  if (mesh.level.size() == mesh.num_vertices())
+    points.push_back(
+        {kLevelArray, 1, ValueType::UInt16, [=](std::size_t v) { return double(m->level[v]); }});
+}
+
+DataArray materialize(const ArraySource &source, std::size_t rows) {
+  DataArray a{source.name, source.components,
+              std::vector<double>(rows * std::size_t(source.components)), source.type};
+  for (std::size_t i = 0; i < a.values.size(); ++i)
+    a.values[i] = source.value(i);
+  return a;
+}
+
 void encode_tree(Mesh &mesh) {
   if (!mesh.has_tree()) {
     strip_tree(mesh); // arrays a tool copied from another mesh are not this one's tree
     return;
   }
-  const std::size_t nc = mesh.num_cells(), nv = mesh.num_vertices();
-  DataArray generation{kGenerationArray, 1, std::vector<double>(nc)};
-  for (std::size_t c = 0; c < nc; ++c)
-    generation.values[c] = mesh.generation[c];
-  DataArray a{kParentAArray, 1, std::vector<double>(nv)},
-      b{kParentBArray, 1, std::vector<double>(nv)};
-  for (std::size_t v = 0; v < nv; ++v) {
-    const VertexId p = mesh.parent_edge[2 * v], q = mesh.parent_edge[2 * v + 1];
-    a.values[v] = p == kNoVertex ? -1.0 : double(p);
-    b.values[v] = q == kNoVertex ? -1.0 : double(q);
-  }
-  generation.type = ValueType::UInt16;
-  a.type = b.type = ValueType::Int32;
-  put(mesh.cell_data, std::move(generation));
-  put(mesh.point_data, std::move(a));
-  put(mesh.point_data, std::move(b));
-  if (mesh.level.size() == nv) {
-    DataArray level{kLevelArray, 1, std::vector<double>(mesh.level.begin(), mesh.level.end()),
-                    ValueType::UInt16};
-    put(mesh.point_data, std::move(level));
-  } else {
+  std::vector<ArraySource> cells, points;
+  tree_sources(mesh, cells, points);
+  for (const ArraySource &a : cells)
+    put(mesh.cell_data, materialize(a, mesh.num_cells()));
+  for (const ArraySource &a : points)
+    put(mesh.point_data, materialize(a, mesh.num_vertices()));
+  if (mesh.level.size() != mesh.num_vertices())
     std::erase_if(mesh.point_data, [](const DataArray &x) { return x.name == kLevelArray; });
-  }
 }
 
 void strip_tree(Mesh &mesh) {
