@@ -141,27 +141,34 @@ std::size_t g_chunk_bytes = 0;
 
 // An allocator whose resize() leaves new elements uninitialised (for trivial
 // types): the walk's buffer is written in full before it is read, and
-// zero-filling ~100 MB per walk was a tenth of `bisect info`'s time.
+// zero-filling ~100 MB per walk was a tenth of `bisect info`'s time. Large
+// blocks are mapped with their pages populated at once (MAP_POPULATE): the
+// kernel fills them in one call instead of one fault per page. Transparent
+// huge pages (MADV_HUGEPAGE) were as fast at best, but where the kernel had
+// to compact memory first, the final check's first scan took 0.2-0.3 s
+// instead of 0.05 (4D, 5.2 M pentatopes, 144 MB).
 template <class T> struct UninitialisedAllocator : std::allocator<T> {
   template <class U> struct rebind { using other = UninitialisedAllocator<U>; };
   UninitialisedAllocator() = default;
   template <class U> UninitialisedAllocator(const UninitialisedAllocator<U> &) noexcept {}
+  static constexpr std::size_t kLarge = std::size_t(8) << 20;
+  static std::size_t mapped_bytes(std::size_t n) {
+    constexpr std::size_t kPage = 4096;
+    return (n * sizeof(T) + kPage - 1) / kPage * kPage;
+  }
   T *allocate(std::size_t n) {
-    constexpr std::size_t kHuge = std::size_t(2) << 20;
-    const std::size_t bytes = n * sizeof(T);
-    if (bytes < 4 * kHuge)
+    if (n * sizeof(T) < kLarge)
       return std::allocator<T>::allocate(n);
-    void *p = std::aligned_alloc(kHuge, (bytes + kHuge - 1) / kHuge * kHuge);
-    if (!p)
+    void *p = mmap(nullptr, mapped_bytes(n), PROT_READ | PROT_WRITE,
+                   MAP_PRIVATE | MAP_ANONYMOUS | MAP_POPULATE, -1, 0);
+    if (p == MAP_FAILED)
       throw std::bad_alloc();
-    madvise(p, (bytes + kHuge - 1) / kHuge * kHuge, MADV_HUGEPAGE);
     return static_cast<T *>(p);
   }
   void deallocate(T *p, std::size_t n) {
-    constexpr std::size_t kHuge = std::size_t(2) << 20;
-    if (n * sizeof(T) < 4 * kHuge)
+    if (n * sizeof(T) < kLarge)
       return std::allocator<T>::deallocate(p, n);
-    std::free(p);
+    munmap(p, mapped_bytes(n));
   }
   template <class U> void construct(U *p) noexcept { ::new (static_cast<void *>(p)) U; }
   template <class U, class... Args> void construct(U *p, Args &&...args) {
@@ -263,7 +270,7 @@ struct Walk {
 #pragma omp parallel for num_threads(parts) schedule(static, 1)
     for (int t = 0; t < parts; ++t) {
       std::size_t *mine = counts.data() + std::size_t(t) * coarse;
-      for (std::size_t c = part_begin(t); c < part_begin(t + 1); ++c) {
+      for (std::size_t c = part_begin(t), end = part_begin(t + 1); c < end; ++c) {
         const VertexId *cell = mesh.cell(CellId(c));
         if constexpr (K == Dim) {
           // A facet's smallest id is the cell's smallest, except for the
@@ -389,6 +396,8 @@ struct Walk {
     std::vector<Packed> ids;
     std::vector<std::uint16_t> fine;
     std::vector<std::uint32_t> count;
+    // The slots filled by a range, in the order filled.
+    std::vector<std::uint32_t> filled;
   };
 
   // Hashes entries [0, n) of (ids, fine), entries of one coarse bucket, and
@@ -398,10 +407,13 @@ struct Walk {
   static bool match_range(const Packed *ids, const std::uint16_t *fine, std::size_t n,
                           MatchTable &table, std::vector<std::pair<std::uint16_t, Packed>> &singles,
                           std::size_t &pairs) {
-    // Most facets come in pairs, so at most n / 2 + 1 distinct keys: a load
-    // of at most about one half.
-    std::size_t cap = 64;
-    while (cap < n)
+    // Most facets come in pairs, so at most n / 2 + 1 distinct keys: with
+    // at least 2n slots a load of at most about a quarter, so that a probe
+    // rarely meets another key and the one branch below is predictable.
+    // Whether a facet is the first or the second of its pair is a coin toss;
+    // it decides the slot's new contents arithmetically, not by a branch.
+    std::size_t cap = 128;
+    while (cap < 2 * n)
       cap *= 2;
     if (table.slots.size() < cap || table.stamp == 0xFFFFFFFFu) {
       table.slots.assign(std::max(cap, table.slots.size()), MatchSlot{0, 0, 0, 0, 0});
@@ -411,35 +423,67 @@ struct Walk {
     // A table sized for this range: the low bits of the hash.
     const std::size_t mask = cap - 1;
     std::size_t matched = 0;
+    unsigned bad = 0;
+    // The slots are found a few entries ahead and prefetched: a probe then
+    // rarely waits for the core's second-level cache.
+    constexpr std::size_t kAhead = 8;
+    MatchSlot *const slots = table.slots.data();
+    if (table.filled.size() < n)
+      table.filled.resize(n);
+    std::uint32_t *const filled = table.filled.data();
+    std::size_t fills = 0;
+    auto slot_of = [&](std::size_t i) {
+      const Packed key = ids[i] >> 1;
+      std::uint64_t h = std::uint64_t(key) ^ (std::uint64_t(fine[i]) << 48);
+      if constexpr (sizeof(Packed) > 8)
+        h ^= std::uint64_t(key >> 64);
+      h ^= h >> 33;
+      h *= 0xFF51AFD7ED558CCDull;
+      h ^= h >> 33;
+      return std::size_t(h & mask);
+    };
+    std::size_t ring[kAhead];
+    for (std::size_t i = 0; i < std::min(n, kAhead); ++i) {
+      ring[i] = slot_of(i);
+      __builtin_prefetch(&slots[ring[i]], 1);
+    }
     for (std::size_t i = 0; i < n; ++i) {
       const Packed key = ids[i] >> 1;
       const std::uint8_t side = std::uint8_t(ids[i] & 1u);
-      std::uint64_t h =
-          (std::uint64_t(key) ^ (std::uint64_t(fine[i]) << 47)) * 0x9E3779B97F4A7C15ull;
-      h ^= h >> 32;
-      for (std::size_t at = h & mask;; at = (at + 1) & mask) {
-        MatchSlot &slot = table.slots[at];
-        if (slot.stamp != stamp) {
-          slot = MatchSlot{key, stamp, fine[i], side, 1};
-          break;
-        }
-        if (slot.ids == key && slot.fine == fine[i]) {
-          if (slot.copies != 1 || slot.side == side)
-            return false; // a third copy, or two cells on one side
-          slot.copies = 2;
-          ++matched;
+      const std::uint16_t f = fine[i];
+      std::size_t at = ring[i % kAhead];
+      if (i + kAhead < n) {
+        const std::size_t next = slot_of(i + kAhead);
+        ring[i % kAhead] = next;
+        __builtin_prefetch(&slots[next], 1);
+      }
+      for (;; at = (at + 1) & mask) {
+        MatchSlot &slot = slots[at];
+        const unsigned empty = slot.stamp != stamp;
+        const unsigned same = (slot.ids == key) & (slot.fine == f) & (empty ^ 1u);
+        if (empty | same) {
+          // A third copy, or two cells on one side.
+          bad |= same & ((slot.copies != 1) | (slot.side == side));
+          matched += same;
+          const std::uint8_t copies = std::uint8_t(slot.copies * (empty ^ 1u) + 1);
+          const std::uint8_t first_side = empty ? side : slot.side;
+          slot = MatchSlot{key, stamp, f, first_side, copies};
+          filled[fills] = std::uint32_t(at);
+          fills += empty;
           break;
         }
       }
     }
+    if (bad)
+      return false;
     pairs += matched;
     // Inside the domain every facet is matched: no need to scan the table.
     if (2 * matched == n)
       return true;
     const std::size_t first = singles.size();
-    for (std::size_t at = 0; at < cap; ++at) {
-      const MatchSlot &slot = table.slots[at];
-      if (slot.stamp == stamp && slot.copies == 1)
+    for (std::size_t k = 0; k < fills; ++k) {
+      const MatchSlot &slot = slots[filled[k]];
+      if (slot.copies == 1)
         singles.emplace_back(slot.fine, Packed((slot.ids << 1) | slot.side));
     }
     std::sort(singles.begin() + std::ptrdiff_t(first), singles.end());
@@ -534,7 +578,7 @@ struct Walk {
           cursor[b - b0] += counts[std::size_t(u) * coarse + b];
       }
       std::array<VertexId, K> key;
-      for (std::size_t c = part_begin(t); c < part_begin(t + 1); ++c) {
+      for (std::size_t c = part_begin(t), end = part_begin(t + 1); c < end; ++c) {
         const VertexId *cell = mesh.cell(CellId(c));
         if constexpr (K == Dim && WithRefs) {
           // Facets from the cell's sorted ids: facet k omits the k-th
@@ -558,23 +602,35 @@ struct Walk {
           for (int i = 0; i <= Dim; ++i)
             ids[i] = VertexId(keys[i] >> 3);
           const int sign = signs ? (*signs)[c] : 0;
-          for (int k = 0; k <= Dim; ++k) {
-            const VertexId low = k ? ids[0] : ids[1];
-            if (low < lo_v || low >= hi_v)
-              continue;
-            unsigned __int128 p = 0;
+          auto facet = [&](int k) {
+            Packed p = 0;
             for (int i = 0, j = 0; i <= Dim; ++i)
               if (i != k && j++ > 0)
                 p = (p << kIdBits) | ids[i];
             const bool positive = (parity + Dim - k) % 2 ? sign < 0 : sign > 0;
             if constexpr (SideOnly)
-              p = (p << 1) | unsigned(positive);
+              return Packed((p << 1) | unsigned(positive));
             else
-              p = (p << 32) | (std::uint32_t(c * M + (keys[k] & 7u)) | (positive ? kSideBit : 0u));
-            const std::size_t at = cursor[(low >> shift) - b0]++;
-            buffer[at] = Packed(p);
+              return Packed((p << 32) |
+                            (std::uint32_t(c * M + (keys[k] & 7u)) | (positive ? kSideBit : 0u)));
+          };
+          // Facet 0 (without the smallest id) goes to the second smallest
+          // id's bucket, facets 1..Dim side by side to the smallest's.
+          if (ids[1] >= lo_v && ids[1] < hi_v) {
+            const std::size_t at = cursor[(ids[1] >> shift) - b0]++;
+            buffer[at] = facet(0);
             if (shift)
-              fine[at] = std::uint16_t(low & mask);
+              fine[at] = std::uint16_t(ids[1] & mask);
+          }
+          if (ids[0] >= lo_v && ids[0] < hi_v) {
+            std::size_t &end = cursor[(ids[0] >> shift) - b0];
+            const std::size_t at = end;
+            end += Dim;
+            for (int k = 1; k <= Dim; ++k) {
+              buffer[at + k - 1] = facet(k);
+              if (shift)
+                fine[at + k - 1] = std::uint16_t(ids[0] & mask);
+            }
           }
           continue;
         }
@@ -793,13 +849,35 @@ template <int Dim> double longest_squared_edge(const double *p) {
   return l;
 }
 
-// Degenerate: |vol| <= 1e-14 * (longest edge)^n.
-template <int Dim> bool degenerate(const double *p, double volume) {
-  const double l2 = longest_squared_edge<Dim>(p);
+// 1e-14 * l^Dim for a squared length l2 (the degeneracy threshold).
+template <int Dim> double degeneracy_bound(double l2) {
   double ln = Dim % 2 ? std::sqrt(l2) : 1; // l^Dim
   for (int i = 0; i < Dim / 2; ++i)
     ln *= l2;
-  return !(std::abs(volume) > 1e-14 * ln);
+  return 1e-14 * ln;
+}
+
+// Degenerate: |vol| <= 1e-14 * (longest edge)^n.
+template <int Dim> bool degenerate(const double *p, double volume) {
+  return !(std::abs(volume) > degeneracy_bound<Dim>(longest_squared_edge<Dim>(p)));
+}
+
+// The squared diagonal of the points' bounding box, which no edge passes
+// (also in rounding: each coordinate difference and sum is monotone).
+template <int Dim> double squared_diagonal(const Mesh &mesh) {
+  double lo[Dim], hi[Dim];
+  for (int k = 0; k < Dim; ++k)
+    lo[k] = hi[k] = mesh.num_vertices() ? mesh.point(0)[k] : 0.0;
+  for (std::size_t v = 0; v < mesh.num_vertices(); ++v)
+    for (int k = 0; k < Dim; ++k) {
+      const double x = mesh.point(VertexId(v))[k];
+      lo[k] = std::min(lo[k], x);
+      hi[k] = std::max(hi[k], x);
+    }
+  double d2 = 0;
+  for (int k = 0; k < Dim; ++k)
+    d2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+  return d2;
 }
 
 // Tolerance for "x lies on a facet", relative to the facet's longest edge and
@@ -1038,6 +1116,7 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
   std::vector<double> first_volume(blocks, 0.0);
   if (signs)
     signs->assign(nc, 0);
+  const double any_edge_bound = degeneracy_bound<Dim>(squared_diagonal<Dim>(mesh));
   const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
   for (std::size_t k = 0; k < blocks; ++k) {
@@ -1050,7 +1129,9 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
       gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
       const double v = geometry::signed_volume<Dim>(pts);
       total += std::abs(v);
-      const bool bad = degenerate<Dim>(pts, v);
+      // Above the bound for the longest possible edge no cell is
+      // degenerate: the cell's own edges are needed only below it.
+      const bool bad = !(std::abs(v) > any_edge_bound) && degenerate<Dim>(pts, v);
       if (signs && !bad)
         (*signs)[c] = v > 0 ? 1 : -1;
       if (bad && first[k] == std::size_t(-1)) {
@@ -2106,15 +2187,19 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
 // into 64 bits while ids fit in 21 bits (meshes below 2,097,152 vertices),
 // else into 128; half the buffer and hash table.
 //
-// Its buffer is held to about the size of the cells' own arrays (ids,
-// stage, tag and generation: 4 (D + 1) + 4 bytes per cell), at least 16 and
-// at most 96 MiB: the refinement's last iteration needs about that much on
-// top of the mesh, so the check does not set the run's memory peak (3D,
-// 3,178,142 tets: 64 MB instead of 96, still two chunks).
+// Its buffer holds a little over half the mesh's facet entries (10 bytes
+// each, D + 1 per cell: 22 bytes per tet, about the size of the cells' own
+// arrays), so that the walk takes two chunks; at least 16 and at most 160
+// MiB. The refinement's last iteration needs more than that on top of the
+// mesh, so the check does not set the run's memory peak (3D, 3,178,142
+// tets: 70 MB; 4D, 5,233,296 pentatopes: 144 MB, two chunks instead of three
+// at the former 96 MiB, and the check's and writing's peak 331 MB against
+// the last iteration's 377).
 template <int D>
 static FacetReport final_facet_pass(const Mesh &mesh, const std::vector<std::int8_t> &signs) {
-  const std::size_t bytes = std::clamp(mesh.num_cells() * std::size_t(4 * (D + 1) + 4),
-                                       std::size_t(16) << 20, kChunkBytes);
+  // (A little over half: chunks end at bucket boundaries.)
+  const std::size_t bytes = std::clamp(mesh.num_cells() * std::size_t(D + 1) * 11 / 2,
+                                       std::size_t(16) << 20, std::size_t(160) << 20);
   if constexpr (D == 4)
     if (mesh.num_vertices() < (std::size_t(1) << 21))
       return facet_pass<D, true, 21>(mesh, &signs, true, nullptr, bytes);
