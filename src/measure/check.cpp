@@ -2190,11 +2190,10 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
 // Its buffer holds a little over half the mesh's facet entries (10 bytes
 // each, D + 1 per cell: 22 bytes per tet, about the size of the cells' own
 // arrays), so that the walk takes two chunks; at least 16 and at most 160
-// MiB. The refinement's last iteration needs more than that on top of the
-// mesh, so the check does not set the run's memory peak (3D, 3,178,142
-// tets: 70 MB; 4D, 5,233,296 pentatopes: 144 MB, two chunks instead of three
-// at the former 96 MiB, and the check's and writing's peak 331 MB against
-// the last iteration's 377).
+// MiB. 3D, 3,178,142 tets: 70 MB, below the last iteration's peak. 4D,
+// 5,233,296 pentatopes: 144 MB, two chunks instead of three at the former
+// 96 MiB; the check and the write then set the run's peak, 333 MB (64
+// bytes per pentatope) against the last iteration's 295.
 template <int D>
 static FacetReport final_facet_pass(const Mesh &mesh, const std::vector<std::int8_t> &signs) {
   // (A little over half: chunks end at bucket boundaries.)
