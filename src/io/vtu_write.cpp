@@ -13,17 +13,19 @@
 #include "bisect/output.hpp"
 #include "bisect/threads.hpp"
 
+#include <libdeflate.h>
 #include <lz4.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fcntl.h>
 #include <limits>
+#include <memory>
 #include <string>
 #include <sys/stat.h>
 #include <vector>
@@ -198,6 +200,11 @@ std::string xml_escaped(const std::string &s) {
   return out;
 }
 
+// A libdeflate compressor, freed with its own function.
+struct Deflater {
+  void operator()(libdeflate_compressor *c) const { libdeflate_free_compressor(c); }
+};
+
 template <class T> const char *type_name();
 template <> const char *type_name<double>() {
   return "Float64";
@@ -286,6 +293,7 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
       {
         std::vector<T> raw;
         raw.reserve(per_block);
+        std::unique_ptr<libdeflate_compressor, Deflater> deflater;
 #pragma omp for schedule(dynamic, 1)
         for (std::size_t b = g0; b < g1; ++b) {
           raw.clear();
@@ -295,11 +303,19 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
           const std::size_t n = raw.size() * sizeof(T);
           std::vector<unsigned char> &tmp = out[b - g0];
           if (compression == VtuCompression::Zlib) {
-            uLongf room = compressBound(uLong(n));
+            // zlib streams made by libdeflate, one compressor per thread
+            // (zlib's compress2 set up and cleared its tables for every
+            // 32 KiB block).
+            if (!deflater)
+              deflater.reset(libdeflate_alloc_compressor(level));
+            const std::size_t room =
+                deflater ? libdeflate_zlib_compress_bound(deflater.get(), n) : 0;
             tmp.resize(room);
-            if (compress2(tmp.data(), &room, src, uLong(n), level) != Z_OK)
+            const std::size_t got =
+                deflater ? libdeflate_zlib_compress(deflater.get(), src, n, tmp.data(), room) : 0;
+            if (got == 0)
               failed = true;
-            tmp.resize(room);
+            tmp.resize(got);
           } else {
             const int room = LZ4_compressBound(int(n));
             tmp.resize(std::size_t(room));
