@@ -21,11 +21,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <memory>
 #include <new>
 #include <stdexcept>
-#include <sys/resource.h>
 
 namespace bisect {
 
@@ -98,23 +96,6 @@ private:
 struct LimitReached {};
 struct PrecisionReached {};
 struct Cancelled {};
-
-// Whether address space costs nothing until it is touched: no ulimit -v
-// (RLIMIT_AS, also set by some batch systems) and no strict overcommit
-// (vm.overcommit_memory = 2, where a reservation is charged in full).
-bool spare_address_space() {
-  rlimit limit{};
-  if (getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY)
-    return false;
-  std::FILE *f = std::fopen("/proc/sys/vm/overcommit_memory", "r");
-  int mode = 0;
-  if (f) {
-    if (std::fscanf(f, "%d", &mode) != 1)
-      mode = 0;
-    std::fclose(f);
-  }
-  return mode != 2;
-}
 
 template <int Dim> class Refiner {
   static constexpr int N = Dim + 1;
@@ -301,23 +282,19 @@ private:
     if (m_.cells.capacity() >= want * N)
       return;
     // Growing copies the cell arrays into fresh pages while the old copy is
-    // alive, so it is done early and seldom. Early: an iteration's first
-    // pass asks for room for 3 new cells per selected one (closure made 2.0
-    // to 2.3 in the benchmarks); growing only for each pass's own bisections
-    // copied 24 M tets in the last pass of issue 13's 26 M-tet run, and its
-    // peak rose by 190 MB. Seldom: the unused capacity is address space only
-    // until cells are written (large blocks are mapped, not touched), so the
-    // arrays grow 8x instead of 2x and are copied about every fourth
-    // iteration instead of every one (4D, 25 iterations to 5,233,296
-    // pentatopes: refine 1.3-1.9 -> 1.0-1.1 s, peak 72 -> 65 bytes per
-    // pentatope). Where address space is counted (see spare_address_space),
-    // a reserve that large would take what later allocations need: 2x there,
-    // and only what is needed when even that fails.
-    static const bool spare = spare_address_space();
-    const std::size_t grow = spare ? 8 : 2;
+    // alive, so it is done early: an iteration's first pass asks for room
+    // for 3 new cells per selected one (closure made 2.0 to 2.3 in the
+    // benchmarks), and the arrays at least double. Growing only for each
+    // pass's own bisections copied the arrays in the middle or at the end of
+    // an iteration, at their largest (4D, 25 iterations to 5,233,296
+    // pentatopes: peak 72 -> 62 bytes per pentatope). Growing 8x at a time
+    // (address space only until written) copied less often but left the
+    // peak at 65-70 bytes per pentatope and took address space that a
+    // ulimit -v needed later. When the memory is short, only what this pass
+    // needs.
     const std::size_t n = m_.num_cells();
-    const std::size_t tries[] = {std::max(want, grow * n), std::max(want, 2 * n), want, need};
-    for (std::size_t i = 0; i < 4; ++i) {
+    const std::size_t tries[] = {std::max(want, 2 * n), want, need};
+    for (std::size_t i = 0; i < 3; ++i) {
       const std::size_t cap = std::min(tries[i], std::max(need, limits_.max_cells));
       try {
         m_.cells.reserve(cap * N);
@@ -330,7 +307,7 @@ private:
           a.values.reserve(cap * std::size_t(a.components));
         return;
       } catch (const std::bad_alloc &) {
-        if (i == 3)
+        if (i == 2)
           throw;
       }
     }

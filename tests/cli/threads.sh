@@ -26,12 +26,4 @@ for t in 2 3; do
     cmp -s "$a" "$b" || fail "$b differs from $a (--threads $t against --threads 1)"
   done
 done
-# The cell arrays grow 8x at a time, 2x under a limit on address space
-# (refine.cpp, Refiner::reserve): the same bytes either way, over several
-# iterations so that the arrays grow in more than one place.
-"$BISECT" refine "$ROOT/data/ball.msh" --region "$ROOT/data/regions/hemisphere.json" -n 6 \
-  -o grow8.vtu -q --quality-csv none
-(ulimit -v 8000000 && exec "$BISECT" refine "$ROOT/data/ball.msh" \
-  --region "$ROOT/data/regions/hemisphere.json" -n 6 -o grow2.vtu -q --quality-csv none)
-cmp -s grow8.vtu grow2.vtu || fail "the output under ulimit -v differs"
 echo "threads: refine, coarsen, info and check give the same bytes for 1, 2 and 3 threads ($cells cells)"
