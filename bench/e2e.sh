@@ -11,9 +11,11 @@
 #
 # Figures: generated cells per second (cells made / whole run), seconds per
 # million generated cells, and peak resident bytes per final cell. A
-# baseline to compare with is kept in bench/baseline-e2e.jsonl (bash
-# bench/e2e.sh > new.jsonl, then /usr/bin/python3 bench/compare.py
-# bench/baseline-e2e.jsonl new.jsonl). The big case's input is data/ball.msh
+# baseline to compare with is kept in bench/baseline-e2e.jsonl (BIG=1, made
+# 2026-12-02 16:35 UTC on a 2-core machine, load about 1.6 from the
+# benchmark itself; bash bench/e2e.sh > new.jsonl, then /usr/bin/python3
+# bench/compare.py bench/baseline-e2e.jsonl new.jsonl; the cases missing
+# from one side are left out). The big case's input is data/ball.msh
 # (6,009 tets, size 0.3) refined everywhere for 2 iterations (56,635 tets):
 # close to issue 13's Gmsh ball of 49,090 tets (-clmax 0.148), without Gmsh.
 set -euo pipefail
