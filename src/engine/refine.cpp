@@ -22,7 +22,6 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
-#include <new>
 #include <stdexcept>
 
 namespace bisect {
@@ -147,13 +146,13 @@ public:
       std::vector<std::uint64_t> seen;
       std::vector<CellId> candidates;
       std::vector<std::vector<CellId>> found;
-      bool first_pass = true;
+      // Room for the whole iteration at once, about: see reserve().
+      reserve(work.size(), 3 * work.size());
       while (!work.empty()) {
         if (limits_.cancel && limits_.cancel->load())
           throw Cancelled{};
         const std::size_t cells_before = m_.num_cells(), verts_before = m_.num_vertices();
-        reserve(work.size(), first_pass ? 3 * work.size() : work.size());
-        first_pass = false;
+        reserve(work.size(), work.size());
         const auto t0 = std::chrono::steady_clock::now();
         for (CellId c : work)
           bisect(c);
@@ -282,35 +281,25 @@ private:
     if (m_.cells.capacity() >= want * N)
       return;
     // Growing copies the cell arrays into fresh pages while the old copy is
-    // alive, so it is done early: an iteration's first pass asks for room
-    // for 3 new cells per selected one (closure made 2.0 to 2.3 in the
+    // alive, so it is done early: an iteration first asks for room for 3
+    // new cells per selected one (closure made 2.0 to 2.3 in the
     // benchmarks), and the arrays at least double. Growing only for each
     // pass's own bisections copied the arrays in the middle or at the end of
     // an iteration, at their largest (4D, 25 iterations to 5,233,296
     // pentatopes: peak 72 -> 62 bytes per pentatope). Growing 8x at a time
     // (address space only until written) copied less often but left the
     // peak at 65-70 bytes per pentatope and took address space that a
-    // ulimit -v needed later. When the memory is short, only what this pass
-    // needs.
-    const std::size_t n = m_.num_cells();
-    const std::size_t tries[] = {std::max(want, 2 * n), want, need};
-    for (std::size_t i = 0; i < 3; ++i) {
-      const std::size_t cap = std::min(tries[i], std::max(need, limits_.max_cells));
-      try {
-        m_.cells.reserve(cap * N);
-        m_.stage.reserve(cap);
-        m_.tag.reserve(cap);
-        m_.generation.reserve(cap);
-        // Cell data grows here too, not in finish(), when the iteration's
-        // scratch (the midpoint table, the undo log) is largest.
-        for (DataArray &a : m_.cell_data)
-          a.values.reserve(cap * std::size_t(a.components));
-        return;
-      } catch (const std::bad_alloc &) {
-        if (i == 2)
-          throw;
-      }
-    }
+    // ulimit -v needed later.
+    const std::size_t cap =
+        std::min(std::max(want, 2 * m_.num_cells()), std::max(need, limits_.max_cells));
+    m_.cells.reserve(cap * N);
+    m_.stage.reserve(cap);
+    m_.tag.reserve(cap);
+    m_.generation.reserve(cap);
+    // Cell data grows here too, not in finish(), when the iteration's
+    // scratch (the midpoint table, the undo log) is largest.
+    for (DataArray &a : m_.cell_data)
+      a.values.reserve(cap * std::size_t(a.components));
   }
 
   VertexId midpoint(VertexId a, VertexId b) {

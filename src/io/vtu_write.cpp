@@ -15,13 +15,13 @@
 
 #include <libdeflate.h>
 #include <lz4.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <fcntl.h>
 #include <limits>
@@ -286,6 +286,10 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
     std::vector<std::vector<unsigned char>> out(std::min(blocks, kGroup));
     std::vector<unsigned char> packed;
     const int workers = int(std::clamp<std::size_t>(blocks / 8, 1, std::size_t(threads())));
+    // One libdeflate compressor per thread for the whole array (zlib's
+    // compress2 set up and cleared its tables for every 32 KiB block).
+    std::vector<std::unique_ptr<libdeflate_compressor, Deflater>> deflaters(
+        static_cast<std::size_t>(workers));
     for (std::size_t g0 = 0; g0 < blocks; g0 += kGroup) {
       const std::size_t g1 = std::min(blocks, g0 + kGroup);
       bool failed = false;
@@ -293,7 +297,7 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
       {
         std::vector<T> raw;
         raw.reserve(per_block);
-        std::unique_ptr<libdeflate_compressor, Deflater> deflater;
+        auto &deflater = deflaters[std::size_t(omp_get_thread_num())];
 #pragma omp for schedule(dynamic, 1)
         for (std::size_t b = g0; b < g1; ++b) {
           raw.clear();
@@ -303,16 +307,15 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
           const std::size_t n = raw.size() * sizeof(T);
           std::vector<unsigned char> &tmp = out[b - g0];
           if (compression == VtuCompression::Zlib) {
-            // zlib streams made by libdeflate, one compressor per thread
-            // (zlib's compress2 set up and cleared its tables for every
-            // 32 KiB block).
             if (!deflater)
               deflater.reset(libdeflate_alloc_compressor(level));
-            const std::size_t room =
-                deflater ? libdeflate_zlib_compress_bound(deflater.get(), n) : 0;
-            tmp.resize(room);
+            if (!deflater) {
+              failed = true;
+              continue;
+            }
+            tmp.resize(libdeflate_zlib_compress_bound(deflater.get(), n));
             const std::size_t got =
-                deflater ? libdeflate_zlib_compress(deflater.get(), src, n, tmp.data(), room) : 0;
+                libdeflate_zlib_compress(deflater.get(), src, n, tmp.data(), tmp.size());
             if (got == 0)
               failed = true;
             tmp.resize(got);

@@ -142,12 +142,12 @@ std::size_t g_chunk_bytes = 0;
 // An allocator whose resize() leaves new elements uninitialised (for trivial
 // types): the walk's buffer is written in full before it is read, and
 // zero-filling ~100 MB per walk was a tenth of `bisect info`'s time. Large
-// blocks are mapped with their pages populated at once (MAP_POPULATE): the
-// kernel fills them in one call instead of one fault per page (in parallel
-// pieces when there are threads). Transparent
-// huge pages (MADV_HUGEPAGE) were as fast at best, but where the kernel had
-// to compact memory first, the final check's first scan took 0.2-0.3 s
-// instead of 0.05 (4D, 5.2 M pentatopes, 144 MB).
+// blocks are mapped with their pages populated at once (MAP_POPULATE, or in
+// parallel pieces when there are threads): the kernel fills them in one call
+// instead of one fault per page. Transparent huge pages (MADV_HUGEPAGE) were
+// as fast at best, but where the kernel had to compact memory first, the
+// final check's first scan took 0.2-0.3 s instead of 0.05 (4D, 5.2 M
+// pentatopes, 144 MB).
 template <class T> struct UninitialisedAllocator : std::allocator<T> {
   template <class U> struct rebind { using other = UninitialisedAllocator<U>; };
   UninitialisedAllocator() = default;
@@ -215,9 +215,10 @@ using UIntFor =
 // than a few thousand of them, and a coarse bucket is visited within the
 // core's cache only while it is small (with the count fixed at 1024, a
 // 26 M-tet mesh put 180,000 facets in each, and the final check spent twice
-// as long per facet as on a 3 M-tet one). A single scatter into one bucket per vertex put
-// each write at a random place in a buffer far larger than the cache, and a
-// cache miss per sub-simplex was most of the final check's time.
+// as long per facet as on a 3 M-tet one). A single scatter into one bucket
+// per vertex put each write at a random place in a buffer far larger than
+// the cache, and a cache miss per sub-simplex was most of the final check's
+// time.
 //
 // The constructor counts the coarse buckets; chunk [b0, b1) of coarse
 // buckets fills `buffer` from one scan of the cells and visits its

@@ -15,8 +15,8 @@ void use_sorted_final_walk(bool on);
 // (0: the default, 2048); a small value makes test meshes take the split.
 void set_final_walk_piece(std::size_t entries);
 
-// The walks' buffer budget in bytes (0: their own, up to 96 MiB); a small
-// one splits test meshes into several chunks.
+// The walks' buffer budget in bytes (0: their own, up to 96 MiB, 160 for
+// the final check); a small one splits test meshes into several chunks.
 void set_walk_chunk_bytes(std::size_t bytes);
 
 } // namespace bisect::testing
