@@ -1,6 +1,9 @@
 // The `bisect` command line. Each command is one file of apps/bisect/; this
 // one parses, dispatches, and maps errors to exit codes in one place.
 #include "cli.hpp"
+#ifdef BISECT_MPI
+#include "mpi/refine_mpi.hpp"
+#endif
 
 #include <atomic>
 #include <csignal>
@@ -45,7 +48,21 @@ void install_signal_handlers() {
 
 } // namespace
 
+int run(int argc, char **argv);
+
 int main(int argc, char **argv) {
+#ifdef BISECT_MPI
+  // Under mpirun every rank runs the command (README, "MPI").
+  mpi_start(&argc, &argv);
+  const int code = run(argc, argv);
+  mpi_stop();
+  return code;
+#else
+  return run(argc, argv);
+#endif
+}
+
+int run(int argc, char **argv) {
   install_signal_handlers();
 
   CLI::App app{"bisect: conformal local refinement of triangle, tetrahedral and 4D simplicial "

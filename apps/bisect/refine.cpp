@@ -1,5 +1,8 @@
 // bisect refine: read, refine iteration after iteration, check, write.
 #include "cli.hpp"
+#ifdef BISECT_MPI
+#include "mpi/refine_mpi.hpp"
+#endif
 
 #include <algorithm>
 #include <cstdio>
@@ -66,6 +69,34 @@ int run_refine(const RefineArgs &a) {
   std::optional<Marking> marking;
   if (!a.marking.empty())
     marking = parse_marking(a.marking);
+#ifdef BISECT_MPI
+  // Under mpirun, or for a .pvtu: the distributed refine (README, "MPI").
+  if (mpi_world_size() > 1 || a.output.ends_with(".pvtu")) {
+    if (a.region.empty() || !a.indicator.empty() || a.depth != 1 || a.max_elements ||
+        a.max_memory_gib || !a.slices.empty() || a.check || a.output == "-" || !a.format.empty())
+      throw UsageError("distributed refine (mpirun or a .pvtu output) takes --region, "
+                       "--iterations, --marking, --compression, --quality-csv, --origin, "
+                       "--force, --quiet and --json; the other options need a serial run");
+    if (a.output.empty())
+      throw UsageError("distributed refine needs -o (a .pvtu, or a .vtu/.msh to gather into)");
+    DistributedArgs d;
+    d.input = a.input;
+    d.region = a.region;
+    d.output = a.output;
+    d.csv = !a.csv.empty() ? a.csv : default_csv(a.output);
+    d.iterations = a.iterations;
+    d.marking = marking;
+    d.compression = a.compression == "lz4"    ? Compression::Lz4
+                    : a.compression == "none" ? Compression::None
+                                              : Compression::Zlib;
+    d.force = a.force;
+    d.quiet = a.flags.quiet;
+    d.json = a.flags.json;
+    if (a.origin)
+      throw UsageError("--origin: not yet in a distributed refine");
+    return run_refine_mpi(d);
+  }
+#endif
   // -o -: the mesh goes to standard output (then no CSV unless asked for).
   const std::string out =
       output_name(a.output.empty() ? default_output(a.input) : a.output, a.format, a.flags.json);

@@ -3,6 +3,7 @@
 
 #include "bisect/mesh.hpp"
 
+#include <array>
 #include <atomic>
 #include <cstddef>
 #include <limits>
@@ -49,6 +50,17 @@ struct RefineResult {
 // point data is interpolated linearly at midpoints. When the result would pass
 // a limit the mesh is left exactly as it was and `limit_reached` is set.
 RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected,
+                    const RefineLimits &limits = {});
+
+// As above, and first every cell holding an edge of `split` (pairs of vertex
+// ids) is bisected by its own refinement edge until that edge is bisected
+// (the edge's midpoint is made first, so that every cell around it ends up
+// refined at it). An edge that no cell holds is skipped. Distributed
+// refinement (distributed.hpp) uses it for the edges a neighbouring part
+// bisected; the result is the smallest conforming refinement that bisects
+// the selected cells and those edges.
+RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected,
+                    const std::vector<std::array<VertexId, 2>> &split,
                     const RefineLimits &limits = {});
 
 // Bisects every cell once, then refines to conformity.

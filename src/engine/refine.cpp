@@ -19,6 +19,7 @@
 #include "engine/entities.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -128,7 +129,8 @@ public:
       splitter_ = std::make_unique<EntitySplitter>(m_);
   }
 
-  RefineResult run(std::vector<CellId> work) {
+  RefineResult run(std::vector<CellId> work,
+                   const std::vector<std::array<VertexId, 2>> &split = {}) {
     RefineResult result;
     result.selected = work.size();
     // Closure bisects cells about as coarse as the selected ones or coarser;
@@ -146,6 +148,8 @@ public:
       std::vector<std::uint64_t> seen;
       std::vector<CellId> candidates;
       std::vector<std::vector<CellId>> found;
+      if (!split.empty())
+        add_split_edges(split, work, found);
       // Room for the whole iteration at once, about: see reserve().
       reserve(work.size(), 3 * work.size());
       while (!work.empty()) {
@@ -223,6 +227,50 @@ public:
   }
 
 private:
+  // The edges a caller asks to have bisected (refine with `split`): each one
+  // some cell holds gets its midpoint now, and every cell holding it joins
+  // the first pass (once, also when selected): bisected by its own edge,
+  // its children keep the hanging midpoint until the closure reaches it.
+  void add_split_edges(const std::vector<std::array<VertexId, 2>> &split, std::vector<CellId> &work,
+                       std::vector<std::vector<CellId>> &found) {
+    std::vector<std::uint64_t> keys;
+    keys.reserve(split.size());
+    std::vector<std::uint8_t> end(m_.num_vertices(), 0);
+    for (const std::array<VertexId, 2> &e : split) {
+      if (e[0] == e[1] || e[0] >= m_.num_vertices() || e[1] >= m_.num_vertices())
+        throw CheckError("refine: an edge to split names a vertex the mesh does not have");
+      keys.push_back(MidpointMap::key(e[0], e[1]));
+      end[e[0]] = end[e[1]] = 1;
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    auto wanted = [&](VertexId a, VertexId b) {
+      return end[a] && end[b] &&
+             std::binary_search(keys.begin(), keys.end(), MidpointMap::key(a, b));
+    };
+    for_blocks(m_.num_cells(), found, [&](std::size_t c) {
+      const VertexId *x = m_.cell(CellId(c));
+      for (const LocalEdge &e : kLocalEdges<Dim>)
+        if (wanted(x[e.first], x[e.second]))
+          return true;
+      return false;
+    });
+    std::vector<std::uint64_t> in((m_.num_cells() + 63) / 64, 0);
+    for (CellId c : work)
+      in[c >> 6] |= std::uint64_t(1) << (c & 63);
+    for (const std::vector<CellId> &block : found)
+      for (CellId c : block) {
+        const VertexId *x = m_.cell(c);
+        for (const LocalEdge &e : kLocalEdges<Dim>)
+          if (wanted(x[e.first], x[e.second]))
+            midpoint(x[e.first], x[e.second]);
+        if (!(in[c >> 6] >> (c & 63) & 1)) {
+          in[c >> 6] |= std::uint64_t(1) << (c & 63);
+          work.push_back(c);
+        }
+      }
+  }
+
   // found[k] = the indices i in block k of [0, n) (blocks of kBlock) for
   // which test(i) holds, in increasing order; blocks are tested by all
   // threads when there are enough of them.
@@ -476,20 +524,26 @@ private:
 
 template <int Dim>
 RefineResult refine_dim(Mesh &mesh, const std::vector<CellId> &selected,
+                        const std::vector<std::array<VertexId, 2>> &split,
                         const RefineLimits &limits) {
   Refiner<Dim> r(mesh, limits);
-  return r.run(selected);
+  return r.run(selected, split);
 }
 
 } // namespace
 
 RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected, const RefineLimits &limits) {
+  return refine(mesh, selected, {}, limits);
+}
+
+RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected,
+                    const std::vector<std::array<VertexId, 2>> &split, const RefineLimits &limits) {
   if (!mesh.marked())
     throw CheckError("refine: the mesh is not marked");
   RefineLimits l = limits;
   l.max_cells = std::min<std::size_t>(l.max_cells, kNoCell - 1);
   mesh.numbering = {}; // messages from here on name bisect's own ids
-  return dispatch(mesh.dim, [&]<int D>() { return refine_dim<D>(mesh, selected, l); });
+  return dispatch(mesh.dim, [&]<int D>() { return refine_dim<D>(mesh, selected, split, l); });
 }
 
 RefineResult refine_uniform(Mesh &mesh) {

@@ -1,0 +1,261 @@
+// bisect refine under mpirun (a BISECT_MPI build): rank 0 reads and marks
+// the mesh, the ranks refine their parts (distributed.hpp), and the result
+// is written as a .pvtu with a piece per rank, or gathered into one file.
+#include "mpi/refine_mpi.hpp"
+#include "cli.hpp"
+
+#include "bisect/distributed.hpp"
+
+#include <cstdlib>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+namespace bisect::cli {
+
+namespace {
+
+bool g_we_initialised = false;
+
+} // namespace
+
+bool launched_by_mpirun() {
+  for (const char *v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK"})
+    if (std::getenv(v))
+      return true;
+  return false;
+}
+
+void mpi_start(int *argc, char ***argv) {
+  if (!launched_by_mpirun())
+    return;
+  MPI_Init(argc, argv);
+  g_we_initialised = true;
+}
+
+void mpi_stop() {
+  int done = 0;
+  MPI_Finalized(&done);
+  if (g_we_initialised && !done)
+    MPI_Finalize();
+}
+
+int mpi_world_size() {
+  int on = 0;
+  MPI_Initialized(&on);
+  if (!on)
+    return 1;
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  return size;
+}
+
+int run_refine_mpi(const DistributedArgs &a) {
+  const auto t_start = std::chrono::steady_clock::now();
+  int on = 0;
+  MPI_Initialized(&on);
+  if (!on) {
+    // bisect refine ... -o X.pvtu without mpirun: one rank.
+    MPI_Init(nullptr, nullptr);
+    g_we_initialised = true;
+  }
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  const bool pvtu = a.output.size() > 5 && a.output.substr(a.output.size() - 5) == ".pvtu";
+  const bool quiet = a.quiet || rank != 0;
+
+  // Rank 0 reads, validates and marks; a failure there ends every rank with
+  // its exit code (only rank 0 prints it).
+  Mesh mesh;
+  Invariants original;
+  int failure = 0;
+  std::string message;
+  std::unique_ptr<OutputSet> outputs;
+  int h_mesh = -1, h_csv = -1;
+  if (rank == 0) {
+    try {
+      if (!pvtu) {
+        check_extension(a.output);
+        std::vector<std::string> inputs{a.input, a.region};
+        outputs = std::make_unique<OutputSet>(inputs, a.force);
+        h_mesh = outputs->add(a.output);
+      } else {
+        outputs = std::make_unique<OutputSet>(std::vector<std::string>{a.input, a.region}, a.force);
+      }
+      if (a.csv != "none")
+        h_csv = outputs->add(a.csv);
+      mesh = load_for_refinement(a.input, a.marking, quiet);
+      if (!pvtu)
+        check_output_format(a.output, mesh.dim);
+      (void)read_region(a.region, mesh.dim);
+      original = measure_invariants(mesh, false);
+    } catch (const Error &e) {
+      failure = e.kind == ErrorKind::Check ? kExitCheck : kExitInput;
+      message = e.what();
+    } catch (const std::bad_alloc &) {
+      failure = kExitMemory;
+      message = "out of memory reading the input";
+    }
+  }
+  MPI_Bcast(&failure, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (failure) {
+    if (rank == 0)
+      std::cerr << "bisect: " << one_line(message) << "\n";
+    return failure;
+  }
+  double inv[2] = {original.volume, original.boundary_measure};
+  MPI_Bcast(inv, 2, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  original.volume = inv[0];
+  original.boundary_measure = inv[1];
+  int dim = mesh.dim;
+  MPI_Bcast(&dim, 1, MPI_INT, 0, MPI_COMM_WORLD);
+
+  try {
+    const std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
+    DistributedMesh d = distribute(mesh, 0, MPI_COMM_WORLD);
+    mesh = Mesh{};
+    const Invariants part_original = measure_invariants(d.local, false);
+    std::unique_ptr<Region> region = read_region(a.region, dim);
+    if (!quiet)
+      std::cerr << "bisect: " << a.input << ": " << dim << "D, " << with_commas(cells0)
+                << " cells, " << with_commas(verts0) << " vertices, marking "
+                << marking_name(d.local.marking) << "; " << d.size << " ranks, largest part "
+                << "of " << with_commas(d.local.num_cells()) << " cells\n";
+    std::ostringstream rows;
+    rows << "iteration,cells,vertices,selected,bisections,min_quality,max_quality,mean_quality,"
+            "seconds,rounds\n";
+    auto row = [&](int it, std::size_t sel, std::size_t bis, const QualitySummary &q, double sec,
+                   int rounds) {
+      char buf[256];
+      std::snprintf(buf, sizeof buf, "%d,%zu,%zu,%zu,%zu,%.9g,%.9g,%.9g,%.6f,%d\n", it,
+                    d.global_cells, d.global_vertices, sel, bis, q.min, q.max, q.mean, sec, rounds);
+      rows << buf;
+    };
+    QualitySummary q = quality_summary(d);
+    row(0, 0, 0, q, 0.0, 0);
+    std::size_t bisections = 0, selected_total = 0, edges_sent = 0;
+    int rounds_total = 0, iterations = 0;
+    double exchange_seconds = 0;
+    for (int it = 1; it <= a.iterations; ++it) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const std::vector<CellId> selected = select_cells(d.local, *region);
+      const DistributedRefineResult r = refine(d, selected);
+      if (r.precision_reached)
+        throw UsageError("distributed refinement reached the precision limit (an edge below "
+                         "2^-40 of its coordinates' magnitude) in iteration " +
+                         std::to_string(it) +
+                         "; the distributed run cannot undo an iteration yet: no output "
+                         "written; refine without mpirun to stop there");
+      if (r.selected == 0) {
+        if (!quiet)
+          std::cerr << "bisect: the region touches no cell; nothing more to refine\n";
+        break;
+      }
+      q = quality_summary(d);
+      const double sec = seconds_since(t0);
+      ++iterations;
+      bisections += r.bisections;
+      selected_total += r.selected;
+      rounds_total += r.rounds;
+      edges_sent += r.edges_sent;
+      exchange_seconds += r.exchange_seconds;
+      row(it, r.selected, r.bisections, q, sec, r.rounds);
+      if (!quiet) {
+        char buf[320];
+        std::snprintf(buf, sizeof buf,
+                      "iteration %d/%d: %s cells, %s vertices, %s selected, %s bisections "
+                      "(%d exchange rounds), quality min %.4f max %.4f, %.2f s\n",
+                      it, a.iterations, with_commas(d.global_cells).c_str(),
+                      with_commas(d.global_vertices).c_str(), with_commas(r.selected).c_str(),
+                      with_commas(r.bisections).c_str(), r.rounds, q.min, q.max, sec);
+        std::cerr << buf;
+      }
+    }
+    const auto t_check = std::chrono::steady_clock::now();
+    const CheckResult check = check_refined(d, part_original, original);
+    const double check_seconds = seconds_since(t_check);
+    if (!check.ok) {
+      if (rank == 0)
+        std::cerr << "bisect: internal check failed: " << one_line(check.failure)
+                  << "; no output written\n";
+      return kExitCheck;
+    }
+    const auto t_write = std::chrono::steady_clock::now();
+    WriteOptions write_options;
+    write_options.compression = a.compression;
+    if (pvtu) {
+      write_pvtu(a.output, d, a.force, write_options);
+    }
+    if (rank == 0 && h_csv >= 0)
+      write_text_file(outputs->file(h_csv), a.csv, rows.str());
+    if (!pvtu) {
+      Mesh g = gather(d, 0);
+      if (rank == 0) {
+        // The gathered mesh passes the serial final check too.
+        const CheckResult whole = check_refined(g, original);
+        if (!whole.ok) {
+          std::cerr << "bisect: internal check failed: " << one_line(whole.failure)
+                    << "; no output written\n";
+          MPI_Abort(MPI_COMM_WORLD, kExitCheck);
+        }
+        write_output_mesh(*outputs, h_mesh, g, write_options);
+      }
+    }
+    if (rank == 0)
+      outputs->commit();
+    const double write_seconds = seconds_since(t_write);
+    double exchange_max = 0;
+    MPI_Reduce(&exchange_seconds, &exchange_max, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
+    std::uint64_t sent = edges_sent, sent_max = 0, part = d.local.num_cells(), part_max = 0;
+    MPI_Reduce(&sent, &sent_max, 1, MPI_UINT64_T, MPI_MAX, 0, MPI_COMM_WORLD);
+    MPI_Reduce(&part, &part_max, 1, MPI_UINT64_T, MPI_MAX, 0, MPI_COMM_WORLD);
+    const double total = seconds_since(t_start);
+    if (rank == 0 && a.json) {
+      nlohmann::json j;
+      j["input"] = a.input;
+      j["output"] = a.output;
+      j["quality_csv"] = h_csv >= 0 ? nlohmann::json(a.csv) : nlohmann::json(nullptr);
+      j["dim"] = dim;
+      j["ranks"] = d.size;
+      j["marking"] = marking_name(d.local.marking);
+      j["iterations"] = iterations;
+      j["initial_cells"] = cells0;
+      j["initial_vertices"] = verts0;
+      j["cells"] = d.global_cells;
+      j["vertices"] = d.global_vertices;
+      j["bisections"] = bisections;
+      j["selected"] = selected_total;
+      j["exchange_rounds"] = rounds_total;
+      j["largest_part_cells"] = part_max;
+      j["edges_sent_max_rank"] = sent_max;
+      j["exchange_seconds_max_rank"] = exchange_max;
+      j["min_quality"] = q.min;
+      j["max_quality"] = q.max;
+      j["mean_quality"] = q.mean;
+      j["seconds"] = total;
+      j["final_check_seconds"] = check_seconds;
+      j["write_seconds"] = write_seconds;
+      print_json(j);
+    }
+    if (!quiet)
+      std::cerr << "bisect: wrote " << a.output << " (" << with_commas(d.global_cells) << " cells"
+                << (pvtu ? ", " + std::to_string(d.size) + " pieces" : std::string()) << ")"
+                << (h_csv >= 0 ? " and " + a.csv : std::string()) << " in " << std::fixed
+                << std::setprecision(2) << total << " s\n";
+    return kExitOk;
+  } catch (const Error &e) {
+    // The distributed steps throw on every rank alike (a refusal, a failed
+    // write): rank 0 speaks for all.
+    if (rank == 0)
+      std::cerr << "bisect: " << one_line(e.what()) << "\n";
+    return e.kind == ErrorKind::Check   ? kExitCheck
+           : e.kind == ErrorKind::Limit ? kExitLimit
+                                        : kExitInput;
+  } catch (const std::exception &e) {
+    std::cerr << "bisect: rank " << rank << ": " << one_line(e.what()) << "\n";
+    MPI_Abort(MPI_COMM_WORLD, kExitCheck);
+  }
+  return kExitCheck;
+}
+
+} // namespace bisect::cli

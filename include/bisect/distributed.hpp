@@ -1,0 +1,112 @@
+// Distributed refinement on MPI (built with -DBISECT_MPI=ON; the library
+// bisect::mpi). Each rank holds a part of the mesh (the cells of one stretch
+// of a Hilbert curve through the cell centroids) and refines it with the
+// serial engine; the edges a part bisects on its border are sent to the
+// parts that share them, which bisect them too, until no part changes.
+// Because every mark follows from the marking of the whole input, the union
+// of the parts is the serial run's mesh, for every number of ranks (README,
+// "MPI").
+//
+// Vertices are known across ranks by their coordinates: a midpoint is
+// computed from its edge's ends in the same way on every rank, so equal
+// coordinates name the same vertex, exactly, with no id to agree on.
+#pragma once
+
+#include "bisect/check.hpp"
+#include "bisect/io.hpp"
+#include "bisect/measure.hpp"
+#include "bisect/mesh.hpp"
+
+#include <mpi.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace bisect {
+
+// An MPI communicator this code made and frees.
+class Communicator {
+public:
+  Communicator() = default;
+  explicit Communicator(MPI_Comm c) : c_(c) {}
+  ~Communicator();
+  Communicator(Communicator &&o) noexcept : c_(o.c_) { o.c_ = MPI_COMM_NULL; }
+  Communicator &operator=(Communicator &&o) noexcept;
+  Communicator(const Communicator &) = delete;
+  Communicator &operator=(const Communicator &) = delete;
+  MPI_Comm get() const { return c_; }
+
+private:
+  MPI_Comm c_ = MPI_COMM_NULL;
+};
+
+struct DistributedMesh {
+  Communicator comm;  // every rank (a duplicate of the communicator given)
+  Communicator graph; // the ranks sharing a vertex with this one (neighbours)
+  int rank = 0, size = 1;
+  // This rank's cells, with their bisection state, cell and point data. Its
+  // input vertices come first, in increasing input id (so that the global
+  // edge order of the marking compares them as in the whole mesh), then the
+  // vertices refinement made. No tree (mesh.hpp): coarsening is serial.
+  Mesh local;
+  std::vector<std::uint64_t> input_vertex; // per input vertex of `local`: its id in the input
+  std::vector<std::uint64_t> input_cell;   // per cell of the part as given: its input id
+  // Per vertex of `local`: the other ranks that may hold it (sorted). A
+  // superset: a vertex made on an edge gets the ranks both ends have.
+  std::vector<std::vector<int>> sharers;
+  std::vector<int> neighbours; // sorted: every rank in some sharers list
+  std::size_t global_cells = 0, global_vertices = 0;
+};
+
+// Splits `mesh` (significant on `root` only: a marked mesh with no tagged
+// lower-dimensional entities) among the ranks of `comm`: cells sorted along
+// a Hilbert curve through their centroids, in equal stretches. Collective.
+// Throws CheckError (on every rank) when the input has fewer cells than
+// there are ranks or carries entities.
+DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm);
+
+struct DistributedRefineResult {
+  std::size_t selected = 0, bisections = 0; // over all ranks
+  int rounds = 0;                           // exchanges that made some rank bisect more
+  std::size_t edges_sent = 0;               // edges this rank sent (each 2 dim doubles)
+  double exchange_seconds = 0;              // this rank, in communication
+  bool precision_reached = false;           // some rank stopped at the precision
+                                            // limit; the parts are then not usable
+};
+
+// Bisects the cells `selected` (ids of d.local) and refines to conformity
+// across all ranks. Collective.
+DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &selected);
+
+// Global figures (collective): quality over all cells; cells and vertices
+// (shared vertices counted once).
+QualitySummary quality_summary(const DistributedMesh &d);
+void count_global(DistributedMesh &d);
+
+// The final check across ranks (collective; the same answer on every rank):
+// check_refined on each part against the part's own invariants as
+// distributed (`part_original`), then every facet a part has alone must be
+// matched by exactly one other part's, or be on the input's boundary: the
+// sum of the unmatched facets' measures must equal `original`'s boundary
+// measure, and the parts' volumes its volume.
+CheckResult check_refined(const DistributedMesh &d, const Invariants &part_original,
+                          const Invariants &original);
+
+// The whole mesh on `root` (elsewhere an empty mesh): input vertices in input
+// order, then the made ones in lexicographic order of their coordinates;
+// cells in increasing order of their sorted vertex ids. So the gathered
+// mesh is the same file for every number of ranks. Collective.
+Mesh gather(const DistributedMesh &d, int root);
+
+// Writes `path` (.pvtu) on rank 0 and one piece per rank beside it,
+// <stem>_<rank>.vtu, with the bisection state: VTK's parallel reader (the
+// one ParaView uses) reads it. Every file is written to a temporary name and
+// renamed only when all ranks have written theirs. Existing files are
+// replaced only with `force`. Collective; throws InputError on every rank
+// when some rank failed.
+void write_pvtu(const std::string &path, DistributedMesh &d, bool force,
+                const WriteOptions &options = {});
+
+} // namespace bisect

@@ -1,0 +1,973 @@
+// Distributed refinement (bisect/distributed.hpp): partition, exchange of
+// bisected border edges, the final check across parts, gathering and .pvtu.
+#include "bisect/distributed.hpp"
+
+#include "bisect/error.hpp"
+#include "bisect/output.hpp"
+#include "bisect/refine.hpp"
+#include "bisect/state.hpp"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <regex>
+#include <sstream>
+
+namespace bisect {
+
+Communicator::~Communicator() {
+  if (c_ != MPI_COMM_NULL) {
+    int finalized = 0;
+    MPI_Finalized(&finalized);
+    if (!finalized)
+      MPI_Comm_free(&c_);
+  }
+}
+
+Communicator &Communicator::operator=(Communicator &&o) noexcept {
+  if (this != &o) {
+    Communicator old(c_);
+    c_ = o.c_;
+    o.c_ = MPI_COMM_NULL;
+  }
+  return *this;
+}
+
+namespace {
+
+// ---------------------------------------------------------------- buffers
+
+// A flat byte buffer: what rank 0 sends each part, and what parts send back.
+class Writer {
+public:
+  template <class T> void put(const T &v) {
+    const auto *p = reinterpret_cast<const char *>(&v);
+    bytes.insert(bytes.end(), p, p + sizeof(T));
+  }
+  template <class T> void put(const std::vector<T> &v) {
+    put<std::uint64_t>(v.size());
+    const auto *p = reinterpret_cast<const char *>(v.data());
+    bytes.insert(bytes.end(), p, p + v.size() * sizeof(T));
+  }
+  void put(const std::string &s) {
+    put<std::uint64_t>(s.size());
+    bytes.insert(bytes.end(), s.begin(), s.end());
+  }
+  std::vector<char> bytes;
+};
+
+class Reader {
+public:
+  explicit Reader(const std::vector<char> &b) : b_(b) {}
+  template <class T> T get() {
+    T v;
+    need(sizeof(T));
+    std::memcpy(&v, b_.data() + at_, sizeof(T));
+    at_ += sizeof(T);
+    return v;
+  }
+  template <class T> std::vector<T> get_vector() {
+    const auto n = get<std::uint64_t>();
+    need(n * sizeof(T));
+    std::vector<T> v(n);
+    std::memcpy(v.data(), b_.data() + at_, n * sizeof(T));
+    at_ += n * sizeof(T);
+    return v;
+  }
+  std::string get_string() {
+    const auto n = get<std::uint64_t>();
+    need(n);
+    std::string s(b_.data() + at_, n);
+    at_ += n;
+    return s;
+  }
+
+private:
+  void need(std::size_t n) const {
+    if (at_ + n > b_.size())
+      throw CheckError("distributed: a message is shorter than its contents");
+  }
+  const std::vector<char> &b_;
+  std::size_t at_ = 0;
+};
+
+void put_arrays(Writer &w, const std::vector<DataArray> &arrays,
+                const std::vector<std::uint64_t> &ids) {
+  w.put<std::uint64_t>(arrays.size());
+  for (const DataArray &a : arrays) {
+    w.put(a.name);
+    w.put<std::int32_t>(a.components);
+    w.put<std::uint8_t>(std::uint8_t(a.type));
+    std::vector<double> v;
+    v.reserve(ids.size() * std::size_t(a.components));
+    for (std::uint64_t i : ids)
+      for (int k = 0; k < a.components; ++k)
+        v.push_back(a.values[i * std::size_t(a.components) + std::size_t(k)]);
+    w.put(v);
+  }
+}
+
+std::vector<DataArray> get_arrays(Reader &r) {
+  std::vector<DataArray> arrays(r.get<std::uint64_t>());
+  for (DataArray &a : arrays) {
+    a.name = r.get_string();
+    a.components = r.get<std::int32_t>();
+    a.type = ValueType(r.get<std::uint8_t>());
+    a.values = r.get_vector<double>();
+  }
+  return arrays;
+}
+
+// Sends and receives byte buffers larger than an int can count.
+constexpr std::size_t kChunk = std::size_t(1) << 30;
+void send_bytes(const std::vector<char> &b, int to, MPI_Comm comm) {
+  std::uint64_t n = b.size();
+  MPI_Send(&n, 1, MPI_UINT64_T, to, 1, comm);
+  for (std::size_t at = 0; at < b.size(); at += kChunk)
+    MPI_Send(b.data() + at, int(std::min(kChunk, b.size() - at)), MPI_CHAR, to, 2, comm);
+}
+std::vector<char> receive_bytes(int from, MPI_Comm comm) {
+  std::uint64_t n = 0;
+  MPI_Recv(&n, 1, MPI_UINT64_T, from, 1, comm, MPI_STATUS_IGNORE);
+  std::vector<char> b(n);
+  for (std::size_t at = 0; at < b.size(); at += kChunk)
+    MPI_Recv(b.data() + at, int(std::min(kChunk, b.size() - at)), MPI_CHAR, from, 2, comm,
+             MPI_STATUS_IGNORE);
+  return b;
+}
+
+// ---------------------------------------------------------------- points
+
+// Vertices by their coordinates: an open-addressing table of vertex ids.
+class PointIndex {
+public:
+  PointIndex(const std::vector<double> &coords, int dim) : coords_(coords), dim_(dim) {}
+  // The vertex at p, or kNoVertex.
+  VertexId find(const double *p) const {
+    if (slots_.empty())
+      return kNoVertex;
+    for (std::size_t i = slot(p);; i = (i + 1) & mask_) {
+      const VertexId v = slots_[i];
+      if (v == kNoVertex)
+        return kNoVertex;
+      if (std::equal(p, p + dim_, coords_.data() + std::size_t(v) * dim_))
+        return v;
+    }
+  }
+  // Adds vertex v (its coordinates in `coords`); returns the vertex already
+  // there with the same coordinates, or v.
+  VertexId add(VertexId v) {
+    if ((size_ + 1) * 2 > slots_.size())
+      grow();
+    const double *p = coords_.data() + std::size_t(v) * dim_;
+    for (std::size_t i = slot(p);; i = (i + 1) & mask_) {
+      const VertexId w = slots_[i];
+      if (w == kNoVertex) {
+        slots_[i] = v;
+        ++size_;
+        return v;
+      }
+      if (std::equal(p, p + dim_, coords_.data() + std::size_t(w) * dim_))
+        return w;
+    }
+  }
+
+private:
+  std::size_t slot(const double *p) const {
+    std::uint64_t h = 0x243F6A8885A308D3ull;
+    for (int k = 0; k < dim_; ++k) {
+      double x = p[k] == 0 ? 0.0 : p[k]; // -0 and +0 are one point
+      std::uint64_t b;
+      std::memcpy(&b, &x, 8);
+      h = (h ^ b) * 0x9E3779B97F4A7C15ull;
+      h ^= h >> 29;
+    }
+    return std::size_t(h) & mask_;
+  }
+  void grow() {
+    std::vector<VertexId> old = std::move(slots_);
+    slots_.assign(std::max<std::size_t>(1024, old.size() * 2), kNoVertex);
+    mask_ = slots_.size() - 1;
+    size_ = 0;
+    for (VertexId v : old)
+      if (v != kNoVertex)
+        add(v);
+  }
+  const std::vector<double> &coords_;
+  int dim_;
+  std::vector<VertexId> slots_;
+  std::size_t size_ = 0, mask_ = 0;
+};
+
+// ---------------------------------------------------------------- Hilbert
+
+// The position along a Hilbert curve of the point with integer coordinates
+// x[0..n) of `bits` bits each (n * bits <= 64): J. Skilling's transpose
+// method ("Programming the Hilbert curve", AIP Conf. Proc. 707, 2004).
+std::uint64_t hilbert_index(std::uint32_t *x, int n, int bits) {
+  const std::uint32_t top = std::uint32_t(1) << (bits - 1);
+  for (std::uint32_t q = top; q > 1; q >>= 1) {
+    const std::uint32_t p = q - 1;
+    for (int i = 0; i < n; ++i)
+      if (x[i] & q) {
+        x[0] ^= p;
+      } else {
+        const std::uint32_t t = (x[0] ^ x[i]) & p;
+        x[0] ^= t;
+        x[i] ^= t;
+      }
+  }
+  for (int i = 1; i < n; ++i)
+    x[i] ^= x[i - 1];
+  std::uint32_t t = 0;
+  for (std::uint32_t q = top; q > 1; q >>= 1)
+    if (x[n - 1] & q)
+      t ^= q - 1;
+  for (int i = 0; i < n; ++i)
+    x[i] ^= t;
+  std::uint64_t h = 0;
+  for (int b = bits - 1; b >= 0; --b)
+    for (int i = 0; i < n; ++i)
+      h = h << 1 | ((x[i] >> b) & 1);
+  return h;
+}
+
+// part[c] for every cell: equal stretches of the cells in Hilbert order of
+// their centroids (ties by cell id).
+std::vector<int> hilbert_parts(const Mesh &m, int parts) {
+  const int d = m.dim, bits = std::min(21, 64 / d);
+  const std::size_t nc = m.num_cells();
+  std::vector<double> lo(d, std::numeric_limits<double>::infinity()), hi(d, -lo[0]);
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    for (int k = 0; k < d; ++k) {
+      lo[k] = std::min(lo[k], m.point(VertexId(v))[k]);
+      hi[k] = std::max(hi[k], m.point(VertexId(v))[k]);
+    }
+  const double scale = double((std::uint64_t(1) << bits) - 1);
+  std::vector<std::pair<std::uint64_t, CellId>> keys(nc);
+  for (std::size_t c = 0; c < nc; ++c) {
+    std::uint32_t x[4];
+    for (int k = 0; k < d; ++k) {
+      double s = 0;
+      for (int i = 0; i <= d; ++i)
+        s += m.point(m.cell(CellId(c))[i])[k];
+      const double ext = hi[k] - lo[k];
+      const double u = ext > 0 ? (s / (d + 1) - lo[k]) / ext : 0.0;
+      x[k] = std::uint32_t(std::clamp(u, 0.0, 1.0) * scale);
+    }
+    keys[c] = {hilbert_index(x, d, bits), CellId(c)};
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<int> part(nc);
+  for (std::size_t i = 0; i < nc; ++i)
+    part[keys[i].second] = int(i * std::size_t(parts) / nc);
+  return part;
+}
+
+// ---------------------------------------------------------------- helpers
+
+std::vector<int> intersect(const std::vector<int> &a, const std::vector<int> &b) {
+  std::vector<int> out;
+  std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out));
+  return out;
+}
+
+// Exchanges variable-length double buffers with the graph neighbours:
+// out[i] goes to d.neighbours[i]; returns what each neighbour sent.
+std::vector<std::vector<double>> trade(const DistributedMesh &d,
+                                       const std::vector<std::vector<double>> &out) {
+  const std::size_t n = d.neighbours.size();
+  std::vector<int> send_counts(n), recv_counts(n), send_displs(n), recv_displs(n);
+  std::vector<double> send;
+  for (std::size_t i = 0; i < n; ++i) {
+    send_displs[i] = int(send.size());
+    send_counts[i] = int(out[i].size());
+    send.insert(send.end(), out[i].begin(), out[i].end());
+  }
+  MPI_Neighbor_alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT,
+                        d.graph.get());
+  int total = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    recv_displs[i] = total;
+    total += recv_counts[i];
+  }
+  std::vector<double> recv(std::size_t(std::max(total, 1)));
+  MPI_Neighbor_alltoallv(send.empty() ? nullptr : send.data(), send_counts.data(),
+                         send_displs.data(), MPI_DOUBLE, recv.data(), recv_counts.data(),
+                         recv_displs.data(), MPI_DOUBLE, d.graph.get());
+  std::vector<std::vector<double>> in(n);
+  for (std::size_t i = 0; i < n; ++i)
+    in[i].assign(recv.begin() + recv_displs[i], recv.begin() + recv_displs[i] + recv_counts[i]);
+  return in;
+}
+
+// The measure of the facet with vertices f[0..dim) of a dim-D mesh: the
+// square root of its Gram determinant over (dim-1)!.
+double facet_measure(const Mesh &m, const VertexId *f) {
+  const int k = m.dim - 1;
+  double e[3][4], gram[9];
+  for (int i = 0; i < k; ++i)
+    for (int c = 0; c < m.dim; ++c)
+      e[i][c] = m.point(f[i + 1])[c] - m.point(f[0])[c];
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j) {
+      double s = 0;
+      for (int c = 0; c < m.dim; ++c)
+        s += e[i][c] * e[j][c];
+      gram[i * k + j] = s;
+    }
+  const double factorial = k == 3 ? 6.0 : k == 2 ? 2.0 : 1.0;
+  return std::sqrt(std::max(0.0, determinant(gram, k))) / factorial;
+}
+
+bool any_rank(bool mine, MPI_Comm comm) {
+  int v = mine, all = 0;
+  MPI_Allreduce(&v, &all, 1, MPI_INT, MPI_LOR, comm);
+  return all != 0;
+}
+
+std::size_t sum_ranks(std::size_t mine, MPI_Comm comm) {
+  std::uint64_t v = mine, all = 0;
+  MPI_Allreduce(&v, &all, 1, MPI_UINT64_T, MPI_SUM, comm);
+  return std::size_t(all);
+}
+
+} // namespace
+
+// ---------------------------------------------------------------- distribute
+
+DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
+  DistributedMesh d;
+  MPI_Comm dup;
+  MPI_Comm_dup(comm, &dup);
+  d.comm = Communicator(dup);
+  MPI_Comm_rank(dup, &d.rank);
+  MPI_Comm_size(dup, &d.size);
+
+  // Rank 0 says whether the mesh can be split before anyone waits for a part.
+  std::string refusal;
+  if (d.rank == root) {
+    if (!mesh.marked())
+      refusal = "the mesh is not marked";
+    else if (!mesh.entities.empty())
+      refusal = "tagged lower-dimensional cells (boundary facets and the like) do not travel "
+                "with distributed refinement yet; refine this mesh without mpirun";
+    else if (mesh.num_cells() < std::size_t(d.size))
+      refusal = "the mesh has " + std::to_string(mesh.num_cells()) + " cells, fewer than the " +
+                std::to_string(d.size) + " ranks";
+  }
+  std::uint64_t len = refusal.size();
+  MPI_Bcast(&len, 1, MPI_UINT64_T, root, dup);
+  refusal.resize(len);
+  MPI_Bcast(refusal.data(), int(len), MPI_CHAR, root, dup);
+  if (!refusal.empty())
+    throw CheckError("distribute: " + refusal);
+
+  std::vector<char> mine;
+  if (d.rank == root) {
+    const int n = mesh.cell_size();
+    const std::vector<int> part = hilbert_parts(mesh, d.size);
+    std::vector<std::vector<std::uint64_t>> cells_of(std::size_t(d.size));
+    for (std::size_t c = 0; c < part.size(); ++c)
+      cells_of[std::size_t(part[c])].push_back(c);
+    // holders[v]: the parts whose cells hold v, increasing (CSR).
+    const std::size_t nv = mesh.num_vertices();
+    std::vector<std::uint32_t> count(nv + 1, 0), last(nv, std::uint32_t(-1));
+    for (int p = 0; p < d.size; ++p)
+      for (std::uint64_t c : cells_of[std::size_t(p)])
+        for (int i = 0; i < n; ++i) {
+          const VertexId v = mesh.cell(CellId(c))[i];
+          if (last[v] != std::uint32_t(p)) {
+            last[v] = std::uint32_t(p);
+            ++count[v + 1];
+          }
+        }
+    std::partial_sum(count.begin(), count.end(), count.begin());
+    std::vector<std::int32_t> holders(count[nv]);
+    std::vector<std::uint32_t> fill(count.begin(), count.end() - 1);
+    std::fill(last.begin(), last.end(), std::uint32_t(-1));
+    for (int p = 0; p < d.size; ++p)
+      for (std::uint64_t c : cells_of[std::size_t(p)])
+        for (int i = 0; i < n; ++i) {
+          const VertexId v = mesh.cell(CellId(c))[i];
+          if (last[v] != std::uint32_t(p)) {
+            last[v] = std::uint32_t(p);
+            holders[fill[v]++] = p;
+          }
+        }
+    std::vector<VertexId> local_id(nv, kNoVertex);
+    for (int p = 0; p < d.size; ++p) {
+      const std::vector<std::uint64_t> &cells = cells_of[std::size_t(p)];
+      std::vector<std::uint64_t> verts;
+      for (std::uint64_t c : cells)
+        for (int i = 0; i < n; ++i)
+          verts.push_back(mesh.cell(CellId(c))[i]);
+      std::sort(verts.begin(), verts.end());
+      verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+      for (std::size_t i = 0; i < verts.size(); ++i)
+        local_id[verts[i]] = VertexId(i);
+      Writer w;
+      w.put<std::int32_t>(mesh.dim);
+      w.put<std::uint8_t>(std::uint8_t(mesh.marking));
+      w.put(cells);
+      w.put(verts);
+      std::vector<double> coords;
+      coords.reserve(verts.size() * std::size_t(mesh.dim));
+      for (std::uint64_t v : verts)
+        coords.insert(coords.end(), mesh.point(VertexId(v)), mesh.point(VertexId(v)) + mesh.dim);
+      w.put(coords);
+      std::vector<VertexId> conn;
+      std::vector<std::uint8_t> stage, tag;
+      conn.reserve(cells.size() * std::size_t(n));
+      for (std::uint64_t c : cells) {
+        for (int i = 0; i < n; ++i)
+          conn.push_back(local_id[mesh.cell(CellId(c))[i]]);
+        stage.push_back(std::uint8_t(mesh.stage[c]));
+        tag.push_back(mesh.tag[c]);
+      }
+      w.put(conn);
+      w.put(stage);
+      w.put(tag);
+      put_arrays(w, mesh.point_data, verts);
+      put_arrays(w, mesh.cell_data, cells);
+      // The other parts holding each vertex.
+      std::vector<std::uint32_t> offsets{0};
+      std::vector<std::int32_t> others;
+      for (std::uint64_t v : verts) {
+        for (std::uint32_t k = count[v]; k < count[v + 1]; ++k)
+          if (holders[k] != p)
+            others.push_back(holders[k]);
+        offsets.push_back(std::uint32_t(others.size()));
+      }
+      w.put(offsets);
+      w.put(others);
+      // Explicit marking: the ranks of the part's edges, in its ids.
+      std::vector<std::uint64_t> rank_keys;
+      std::vector<std::uint32_t> rank_values;
+      for (const auto &[key, r] : mesh.edge_rank) {
+        const VertexId a = VertexId(key >> 32), b = VertexId(key & 0xffffffffu);
+        if (a < nv && b < nv && local_id[a] != kNoVertex && local_id[b] != kNoVertex) {
+          rank_keys.push_back(edge_key(local_id[a], local_id[b]));
+          rank_values.push_back(r);
+        }
+      }
+      w.put(rank_keys);
+      w.put(rank_values);
+      w.put<std::uint64_t>(mesh.physical_names.size());
+      for (const PhysicalName &pn : mesh.physical_names) {
+        w.put<std::int32_t>(pn.dim);
+        w.put<std::int32_t>(pn.tag);
+        w.put(pn.name);
+      }
+      for (std::uint64_t v : verts)
+        local_id[v] = kNoVertex;
+      if (p == root)
+        mine = std::move(w.bytes);
+      else
+        send_bytes(w.bytes, p, dup);
+    }
+  } else {
+    mine = receive_bytes(root, dup);
+  }
+
+  Reader r(mine);
+  Mesh &m = d.local;
+  m.dim = r.get<std::int32_t>();
+  m.marking = Marking(r.get<std::uint8_t>());
+  d.input_cell = r.get_vector<std::uint64_t>();
+  d.input_vertex = r.get_vector<std::uint64_t>();
+  m.coords = r.get_vector<double>();
+  m.cells = r.get_vector<VertexId>();
+  for (std::uint8_t s : r.get_vector<std::uint8_t>())
+    m.stage.push_back(Stage(s));
+  m.tag = r.get_vector<std::uint8_t>();
+  m.point_data = get_arrays(r);
+  m.cell_data = get_arrays(r);
+  const std::vector<std::uint32_t> offsets = r.get_vector<std::uint32_t>();
+  const std::vector<std::int32_t> others = r.get_vector<std::int32_t>();
+  d.sharers.resize(d.input_vertex.size());
+  for (std::size_t v = 0; v < d.sharers.size(); ++v)
+    d.sharers[v].assign(others.begin() + offsets[v], others.begin() + offsets[v + 1]);
+  const std::vector<std::uint64_t> rank_keys = r.get_vector<std::uint64_t>();
+  const std::vector<std::uint32_t> rank_values = r.get_vector<std::uint32_t>();
+  for (std::size_t i = 0; i < rank_keys.size(); ++i)
+    m.edge_rank[rank_keys[i]] = rank_values[i];
+  m.physical_names.resize(r.get<std::uint64_t>());
+  for (PhysicalName &pn : m.physical_names) {
+    pn.dim = r.get<std::int32_t>();
+    pn.tag = r.get<std::int32_t>();
+    pn.name = r.get_string();
+  }
+
+  std::vector<int> nb(others.begin(), others.end());
+  std::sort(nb.begin(), nb.end());
+  nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+  d.neighbours = nb;
+  MPI_Comm graph;
+  MPI_Dist_graph_create_adjacent(dup, int(nb.size()), nb.empty() ? MPI_WEIGHTS_EMPTY : nb.data(),
+                                 MPI_UNWEIGHTED, int(nb.size()),
+                                 nb.empty() ? MPI_WEIGHTS_EMPTY : nb.data(), MPI_UNWEIGHTED,
+                                 MPI_INFO_NULL, 0, &graph);
+  d.graph = Communicator(graph);
+  count_global(d);
+  return d;
+}
+
+// ---------------------------------------------------------------- refine
+
+DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &selected) {
+  using clock = std::chrono::steady_clock;
+  DistributedRefineResult result;
+  Mesh &m = d.local;
+  const int dim = m.dim;
+  PointIndex index(m.coords, dim);
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    index.add(VertexId(v));
+  std::size_t bisections = 0;
+  bool precision = false;
+  std::size_t made_from = m.num_vertices();
+  RefineResult r = refine(m, selected);
+  bisections += r.bisections;
+  precision |= r.limit_reached;
+  std::vector<std::size_t> slot_of(std::size_t(d.size), std::size_t(-1));
+  for (std::size_t i = 0; i < d.neighbours.size(); ++i)
+    slot_of[std::size_t(d.neighbours[i])] = i;
+  for (;;) {
+    // The vertices made since the last exchange: who may hold them, and the
+    // edges they split, for those ranks.
+    std::vector<std::vector<double>> out(d.neighbours.size());
+    d.sharers.resize(m.num_vertices());
+    for (std::size_t v = made_from; v < m.num_vertices(); ++v) {
+      index.add(VertexId(v));
+      const VertexId a = m.parent_edge[2 * v], b = m.parent_edge[2 * v + 1];
+      d.sharers[v] = intersect(d.sharers[a], d.sharers[b]);
+      for (int rank : d.sharers[v]) {
+        std::vector<double> &o = out[slot_of[std::size_t(rank)]];
+        o.insert(o.end(), m.point(a), m.point(a) + dim);
+        o.insert(o.end(), m.point(b), m.point(b) + dim);
+        ++result.edges_sent;
+      }
+    }
+    made_from = m.num_vertices();
+    const auto t0 = clock::now();
+    const std::vector<std::vector<double>> in = trade(d, out);
+    // The edges this part holds and has not bisected yet.
+    std::vector<std::array<VertexId, 2>> split;
+    for (const std::vector<double> &edges : in)
+      for (std::size_t at = 0; at + 2 * std::size_t(dim) <= edges.size(); at += 2 * dim) {
+        const VertexId a = index.find(edges.data() + at), b = index.find(edges.data() + at + dim);
+        if (a == kNoVertex || b == kNoVertex)
+          continue;
+        double mid[4];
+        for (int k = 0; k < dim; ++k)
+          mid[k] = 0.5 * (m.point(a)[k] + m.point(b)[k]);
+        if (index.find(mid) == kNoVertex)
+          split.push_back({a, b});
+      }
+    const bool more = any_rank(!split.empty() || precision, d.comm.get());
+    result.exchange_seconds += std::chrono::duration<double>(clock::now() - t0).count();
+    if (!more || any_rank(precision, d.comm.get()))
+      break;
+    ++result.rounds;
+    r = refine(m, {}, split);
+    bisections += r.bisections;
+    precision |= r.limit_reached;
+  }
+  result.precision_reached = any_rank(precision, d.comm.get());
+  result.selected = sum_ranks(selected.size(), d.comm.get());
+  result.bisections = sum_ranks(bisections, d.comm.get());
+  // The parts keep no tree: each refine() call above started one.
+  m.clear_tree();
+  count_global(d);
+  return result;
+}
+
+void count_global(DistributedMesh &d) {
+  // A vertex is counted by the lowest rank holding it (sharers are a
+  // superset, so a vertex some lower rank only might hold is confirmed by
+  // asking: here, by its coordinates).
+  const Mesh &m = d.local;
+  d.global_cells = sum_ranks(m.num_cells(), d.comm.get());
+  std::vector<std::vector<double>> out(d.neighbours.size());
+  std::vector<std::size_t> slot_of(std::size_t(d.size), std::size_t(-1));
+  for (std::size_t i = 0; i < d.neighbours.size(); ++i)
+    slot_of[std::size_t(d.neighbours[i])] = i;
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    for (int r : d.sharers[v])
+      if (r > d.rank) {
+        std::vector<double> &o = out[slot_of[std::size_t(r)]];
+        o.insert(o.end(), m.point(VertexId(v)), m.point(VertexId(v)) + m.dim);
+      }
+  const std::vector<std::vector<double>> in = trade(d, out);
+  PointIndex index(m.coords, m.dim);
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    index.add(VertexId(v));
+  std::vector<std::uint8_t> counted_elsewhere(m.num_vertices(), 0);
+  for (std::size_t i = 0; i < in.size(); ++i)
+    if (d.neighbours[i] < d.rank)
+      for (std::size_t at = 0; at + std::size_t(m.dim) <= in[i].size(); at += std::size_t(m.dim)) {
+        const VertexId v = index.find(in[i].data() + at);
+        if (v != kNoVertex)
+          counted_elsewhere[v] = 1;
+      }
+  std::size_t mine = 0;
+  for (std::uint8_t c : counted_elsewhere)
+    mine += !c;
+  d.global_vertices = sum_ranks(mine, d.comm.get());
+}
+
+QualitySummary quality_summary(const DistributedMesh &d) {
+  const QualitySummary q = quality_summary(d.local);
+  double mins[2] = {q.min, -q.max}, all[2];
+  MPI_Allreduce(mins, all, 2, MPI_DOUBLE, MPI_MIN, d.comm.get());
+  const double sum = q.mean * double(d.local.num_cells());
+  double total = 0;
+  MPI_Allreduce(&sum, &total, 1, MPI_DOUBLE, MPI_SUM, d.comm.get());
+  return {all[0], -all[1], d.global_cells ? total / double(d.global_cells) : 0.0};
+}
+
+// ---------------------------------------------------------------- check
+
+CheckResult check_refined(const DistributedMesh &d, const Invariants &part_original,
+                          const Invariants &original) {
+  const Mesh &m = d.local;
+  const int dim = m.dim, n = m.cell_size();
+  CheckResult local = check_refined(m, part_original);
+  // The facets this part has alone, by their sorted vertex coordinates.
+  std::map<std::vector<double>, std::pair<double, int>> alone; // -> measure, matches
+  std::vector<std::vector<double>> out(d.neighbours.size());
+  std::vector<std::size_t> slot_of(std::size_t(d.size), std::size_t(-1));
+  for (std::size_t i = 0; i < d.neighbours.size(); ++i)
+    slot_of[std::size_t(d.neighbours[i])] = i;
+  if (local.ok) {
+    std::map<std::vector<VertexId>, int> facets;
+    for (std::size_t c = 0; c < m.num_cells(); ++c)
+      for (int skip = 0; skip < n; ++skip) {
+        std::vector<VertexId> f;
+        for (int i = 0; i < n; ++i)
+          if (i != skip)
+            f.push_back(m.cell(CellId(c))[i]);
+        std::sort(f.begin(), f.end());
+        ++facets[f];
+      }
+    for (const auto &[f, count] : facets) {
+      if (count != 1)
+        continue;
+      std::vector<std::vector<double>> pts;
+      for (VertexId v : f)
+        pts.emplace_back(m.point(v), m.point(v) + dim);
+      std::sort(pts.begin(), pts.end());
+      std::vector<double> key;
+      for (const std::vector<double> &p : pts)
+        key.insert(key.end(), p.begin(), p.end());
+      alone[key] = {facet_measure(m, f.data()), 0};
+      std::vector<int> ranks = d.sharers[f[0]];
+      for (std::size_t i = 1; i < f.size(); ++i)
+        ranks = intersect(ranks, d.sharers[f[i]]);
+      for (int r : ranks) {
+        std::vector<double> &o = out[slot_of[std::size_t(r)]];
+        o.insert(o.end(), key.begin(), key.end());
+      }
+    }
+  }
+  const std::vector<std::vector<double>> in = trade(d, out);
+  const std::size_t width = std::size_t(dim) * std::size_t(dim);
+  for (const std::vector<double> &keys : in)
+    for (std::size_t at = 0; at + width <= keys.size(); at += width) {
+      auto it = alone.find(std::vector<double>(keys.begin() + at, keys.begin() + at + width));
+      if (it != alone.end())
+        ++it->second.second;
+    }
+  double boundary = 0, volume = 0;
+  int shared_thrice = 0;
+  for (const auto &[key, mc] : alone) {
+    if (mc.second == 0)
+      boundary += mc.first;
+    shared_thrice |= mc.second > 1;
+  }
+  const Invariants mine = measure_invariants(m, false);
+  volume = mine.volume;
+  double sums[2] = {boundary, volume}, all[2];
+  MPI_Allreduce(sums, all, 2, MPI_DOUBLE, MPI_SUM, d.comm.get());
+  int flags[2] = {!local.ok, shared_thrice}, any[2];
+  MPI_Allreduce(flags, any, 2, MPI_INT, MPI_LOR, d.comm.get());
+  CheckResult result;
+  auto fail = [&](const std::string &why) {
+    result.ok = false;
+    result.failure = why;
+  };
+  auto close = [](double a, double b) {
+    return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(b));
+  };
+  if (any[0]) {
+    // The first failing rank's message, for every rank.
+    int failing = local.ok ? d.size : d.rank, first = 0;
+    MPI_Allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, d.comm.get());
+    std::uint64_t len = local.failure.size();
+    MPI_Bcast(&len, 1, MPI_UINT64_T, first, d.comm.get());
+    std::string msg = local.failure;
+    msg.resize(len);
+    MPI_Bcast(msg.data(), int(len), MPI_CHAR, first, d.comm.get());
+    fail("part " + std::to_string(first) + ": " + msg);
+  } else if (any[1]) {
+    fail("a facet is shared by three or more cells across parts");
+  } else if (!close(all[1], original.volume)) {
+    fail("volume " + std::to_string(all[1]) + " differs from the input's " +
+         std::to_string(original.volume));
+  } else if (!close(all[0], original.boundary_measure)) {
+    fail("boundary measure " + std::to_string(all[0]) + " differs from the input's " +
+         std::to_string(original.boundary_measure) +
+         " (a facet on a border between parts is split on one side only)");
+  }
+  return result;
+}
+
+// ---------------------------------------------------------------- gather
+
+Mesh gather(const DistributedMesh &d, int root) {
+  const Mesh &m = d.local;
+  Writer w;
+  w.put(d.input_vertex);
+  w.put(m.coords);
+  w.put(m.cells);
+  std::vector<std::uint8_t> stage(m.stage.size());
+  for (std::size_t c = 0; c < stage.size(); ++c)
+    stage[c] = std::uint8_t(m.stage[c]);
+  w.put(stage);
+  w.put(m.tag);
+  std::vector<std::uint64_t> all_v(m.num_vertices()), all_c(m.num_cells());
+  std::iota(all_v.begin(), all_v.end(), 0);
+  std::iota(all_c.begin(), all_c.end(), 0);
+  put_arrays(w, m.point_data, all_v);
+  put_arrays(w, m.cell_data, all_c);
+  if (d.rank != root) {
+    send_bytes(w.bytes, root, d.comm.get());
+    return Mesh{};
+  }
+  const int n = m.cell_size(), dim = m.dim;
+  Mesh g;
+  g.dim = dim;
+  g.marking = m.marking;
+  g.physical_names = m.physical_names;
+  // Parts' vertices merged by coordinates into g; per part, its ids in g.
+  struct Part {
+    std::vector<std::uint64_t> input_vertex;
+    std::vector<double> coords;
+    std::vector<VertexId> cells;
+    std::vector<std::uint8_t> stage, tag;
+    std::vector<DataArray> point_data, cell_data;
+  };
+  std::vector<Part> parts(std::size_t(d.size));
+  for (int p = 0; p < d.size; ++p) {
+    const std::vector<char> bytes = p == root ? w.bytes : receive_bytes(p, d.comm.get());
+    Reader r(bytes);
+    Part &part = parts[std::size_t(p)];
+    part.input_vertex = r.get_vector<std::uint64_t>();
+    part.coords = r.get_vector<double>();
+    part.cells = r.get_vector<VertexId>();
+    part.stage = r.get_vector<std::uint8_t>();
+    part.tag = r.get_vector<std::uint8_t>();
+    part.point_data = get_arrays(r);
+    part.cell_data = get_arrays(r);
+  }
+  // Input vertices first, at their input ids (every input vertex is in some
+  // part: prepare_input refuses unused vertices... or they were dropped).
+  std::uint64_t inputs = 0;
+  for (const Part &p : parts)
+    for (std::uint64_t v : p.input_vertex)
+      inputs = std::max(inputs, v + 1);
+  struct Made {
+    int part;
+    VertexId v;
+  };
+  std::vector<Made> made;
+  for (int p = 0; p < d.size; ++p)
+    for (std::size_t v = parts[std::size_t(p)].input_vertex.size();
+         v < parts[std::size_t(p)].coords.size() / std::size_t(dim); ++v)
+      made.push_back({p, VertexId(v)});
+  auto point = [&](const Made &x) {
+    return parts[std::size_t(x.part)].coords.data() + std::size_t(x.v) * std::size_t(dim);
+  };
+  std::sort(made.begin(), made.end(), [&](const Made &a, const Made &b) {
+    return std::lexicographical_compare(point(a), point(a) + dim, point(b), point(b) + dim);
+  });
+  // Made vertices: one per distinct point.
+  std::vector<std::vector<VertexId>> id_in_g(std::size_t(d.size));
+  for (int p = 0; p < d.size; ++p)
+    id_in_g[std::size_t(p)].assign(parts[std::size_t(p)].coords.size() / std::size_t(dim),
+                                   kNoVertex);
+  std::vector<std::pair<int, VertexId>> source(inputs, {-1, 0}); // g vertex -> a part's vertex
+  for (int p = 0; p < d.size; ++p) {
+    const Part &part = parts[std::size_t(p)];
+    for (std::size_t v = 0; v < part.input_vertex.size(); ++v) {
+      id_in_g[std::size_t(p)][v] = VertexId(part.input_vertex[v]);
+      source[part.input_vertex[v]] = {p, VertexId(v)};
+    }
+  }
+  std::size_t next = inputs;
+  for (std::size_t i = 0; i < made.size(); ++i) {
+    if (i == 0 || !std::equal(point(made[i]), point(made[i]) + dim, point(made[i - 1]))) {
+      source.push_back({made[i].part, made[i].v});
+      ++next;
+    }
+    id_in_g[std::size_t(made[i].part)][made[i].v] = VertexId(next - 1);
+  }
+  g.coords.resize(source.size() * std::size_t(dim), 0.0);
+  for (std::size_t v = 0; v < source.size(); ++v)
+    if (source[v].first >= 0) {
+      const Part &part = parts[std::size_t(source[v].first)];
+      std::copy_n(part.coords.data() + std::size_t(source[v].second) * dim, dim,
+                  g.coords.data() + v * std::size_t(dim));
+    }
+  for (std::size_t a = 0; a < m.point_data.size(); ++a) {
+    DataArray out = parts[0].point_data[a];
+    const std::size_t k = std::size_t(out.components);
+    out.values.assign(source.size() * k, 0.0);
+    for (std::size_t v = 0; v < source.size(); ++v)
+      if (source[v].first >= 0) {
+        const DataArray &in = parts[std::size_t(source[v].first)].point_data[a];
+        std::copy_n(in.values.data() + std::size_t(source[v].second) * k, k,
+                    out.values.data() + v * k);
+      }
+    g.point_data.push_back(std::move(out));
+  }
+  // Cells by their sorted ids in g.
+  struct CellRef {
+    std::array<VertexId, 5> key;
+    int part;
+    CellId c;
+  };
+  std::vector<CellRef> refs;
+  for (int p = 0; p < d.size; ++p) {
+    const Part &part = parts[std::size_t(p)];
+    for (std::size_t c = 0; c < part.stage.size(); ++c) {
+      CellRef ref{{}, p, CellId(c)};
+      ref.key.fill(0);
+      for (int i = 0; i < n; ++i)
+        ref.key[std::size_t(i)] = id_in_g[std::size_t(p)][part.cells[c * std::size_t(n) + i]];
+      std::sort(ref.key.begin(), ref.key.begin() + n);
+      refs.push_back(ref);
+    }
+  }
+  std::sort(refs.begin(), refs.end(),
+            [](const CellRef &a, const CellRef &b) { return a.key < b.key; });
+  for (const DataArray &a : parts[0].cell_data)
+    g.cell_data.push_back({a.name, a.components, {}, a.type});
+  for (const CellRef &ref : refs) {
+    const Part &part = parts[std::size_t(ref.part)];
+    for (int i = 0; i < n; ++i)
+      g.cells.push_back(id_in_g[std::size_t(ref.part)][part.cells[ref.c * std::size_t(n) + i]]);
+    g.stage.push_back(Stage(part.stage[ref.c]));
+    g.tag.push_back(part.tag[ref.c]);
+    for (std::size_t a = 0; a < g.cell_data.size(); ++a) {
+      const DataArray &in = part.cell_data[a];
+      const std::size_t k = std::size_t(in.components);
+      g.cell_data[a].values.insert(g.cell_data[a].values.end(), in.values.begin() + ref.c * k,
+                                   in.values.begin() + (ref.c + 1) * k);
+    }
+  }
+  return g;
+}
+
+// ---------------------------------------------------------------- .pvtu
+
+namespace {
+
+// The DataArray declarations of a .vtu piece's PointData, CellData and
+// Points, as PDataArray lines (the piece's header is plain XML up to its
+// appended data).
+std::string parallel_declarations(const std::string &piece) {
+  std::ifstream in(piece, std::ios::binary);
+  std::string head(1 << 16, '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(std::size_t(in.gcount()));
+  const std::size_t end = head.find("<AppendedData");
+  head = head.substr(0, end);
+  std::string out;
+  for (const char *section : {"PointData", "CellData", "Points"}) {
+    const std::size_t a = head.find(std::string("<") + section);
+    const std::size_t b = head.find(std::string("</") + section + ">");
+    out += std::string("    <P") + section + ">\n";
+    if (a != std::string::npos && b != std::string::npos) {
+      const std::string body = head.substr(a, b - a);
+      static const std::regex array("<DataArray([^>]*?)/?>");
+      static const std::regex keep(R"((type|Name|NumberOfComponents)="[^"]*")");
+      for (auto it = std::sregex_iterator(body.begin(), body.end(), array);
+           it != std::sregex_iterator(); ++it) {
+        const std::string attrs = (*it)[1];
+        std::string kept;
+        for (auto k = std::sregex_iterator(attrs.begin(), attrs.end(), keep);
+             k != std::sregex_iterator(); ++k)
+          kept += " " + k->str();
+        out += "      <PDataArray" + kept + "/>\n";
+      }
+    }
+    out += std::string("    </P") + section + ">\n";
+  }
+  return out;
+}
+
+} // namespace
+
+void write_pvtu(const std::string &path, DistributedMesh &d, bool force,
+                const WriteOptions &options) {
+  namespace fs = std::filesystem;
+  const fs::path p(path);
+  const std::string stem = p.stem().string();
+  const auto piece_name = [&](int r) { return stem + "_" + std::to_string(r) + ".vtu"; };
+  const std::string piece = (p.parent_path() / piece_name(d.rank)).string();
+  std::string error;
+  {
+    OutputSet outputs({}, force);
+    int h_piece = -1, h_pvtu = -1;
+    try {
+      h_piece = outputs.add(piece);
+      if (d.rank == 0)
+        h_pvtu = outputs.add(path);
+      WriteOptions o = options;
+      o.format = "vtu";
+      write_mesh_file_with_state(outputs.file(h_piece), piece, d.local, o);
+      if (d.rank == 0) {
+        std::ostringstream x;
+        x << "<?xml version=\"1.0\"?>\n"
+          << "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+             "header_type=\"UInt64\">\n"
+          << "  <PUnstructuredGrid GhostLevel=\"0\">\n"
+          << parallel_declarations(outputs.file(h_piece));
+        for (int r = 0; r < d.size; ++r)
+          x << "    <Piece Source=\"" << piece_name(r) << "\"/>\n";
+        x << "  </PUnstructuredGrid>\n</VTKFile>\n";
+        std::ofstream f(outputs.file(h_pvtu), std::ios::binary | std::ios::trunc);
+        f << x.str();
+        f.flush();
+        if (!f)
+          throw InputError(path, "cannot write: " + write_failure(errno));
+      }
+    } catch (const Error &e) {
+      error = e.what();
+    }
+    // Every rank renames only when every rank has written.
+    int failing = error.empty() ? d.size : d.rank, first = d.size;
+    MPI_Allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, d.comm.get());
+    if (first == d.size) {
+      outputs.commit();
+      MPI_Barrier(d.comm.get());
+      return;
+    }
+    std::uint64_t len = error.size();
+    MPI_Bcast(&len, 1, MPI_UINT64_T, first, d.comm.get());
+    error.resize(len);
+    MPI_Bcast(error.data(), int(len), MPI_CHAR, first, d.comm.get());
+  }
+  throw InputError({}, error);
+}
+
+} // namespace bisect
