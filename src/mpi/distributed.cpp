@@ -6,6 +6,7 @@
 #include "bisect/output.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/state.hpp"
+#include "core/faces.hpp"
 
 #include <algorithm>
 #include <array>
@@ -20,6 +21,7 @@
 #include <numeric>
 #include <regex>
 #include <sstream>
+#include <unordered_map>
 
 namespace bisect {
 
@@ -357,9 +359,6 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
   if (d.rank == root) {
     if (!mesh.marked())
       refusal = "the mesh is not marked";
-    else if (!mesh.entities.empty())
-      refusal = "tagged lower-dimensional cells (boundary facets and the like) do not travel "
-                "with distributed refinement yet; refine this mesh without mpirun";
     else if (mesh.num_cells() < std::size_t(d.size))
       refusal = "the mesh has " + std::to_string(mesh.num_cells()) + " cells, fewer than the " +
                 std::to_string(d.size) + " ranks";
@@ -369,7 +368,7 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
   refusal.resize(len);
   MPI_Bcast(refusal.data(), int(len), MPI_CHAR, root, dup);
   if (!refusal.empty())
-    throw CheckError("distribute: " + refusal);
+    throw UsageError("distributed refinement: " + refusal);
 
   std::vector<char> mine;
   if (d.rank == root) {
@@ -404,6 +403,12 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
           }
         }
     std::vector<VertexId> local_id(nv, kNoVertex);
+    // Tagged entities: each goes to every part with a cell it is a face of.
+    std::vector<std::unordered_multimap<FaceKey, std::uint64_t, FaceKeyHash>> entity_index(
+        mesh.entities.size());
+    for (std::size_t b = 0; b < mesh.entities.size(); ++b)
+      for (std::size_t i = 0; i < mesh.entities[b].size(); ++i)
+        entity_index[b].emplace(face_key(mesh.entities[b].entity(i), mesh.entities[b].dim + 1), i);
     for (int p = 0; p < d.size; ++p) {
       const std::vector<std::uint64_t> &cells = cells_of[std::size_t(p)];
       std::vector<std::uint64_t> verts;
@@ -467,6 +472,26 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
         w.put<std::int32_t>(pn.tag);
         w.put(pn.name);
       }
+      w.put<std::uint64_t>(mesh.entities.size());
+      for (std::size_t b = 0; b < mesh.entities.size(); ++b) {
+        const Entities &block = mesh.entities[b];
+        std::vector<std::uint64_t> taken;
+        for (std::uint64_t c : cells)
+          for_each_face(mesh.cell(CellId(c)), n, block.dim, [&](const VertexId *f, int count) {
+            auto [lo, hi] = entity_index[b].equal_range(face_key(f, count));
+            for (auto it = lo; it != hi; ++it)
+              taken.push_back(it->second);
+          });
+        std::sort(taken.begin(), taken.end());
+        taken.erase(std::unique(taken.begin(), taken.end()), taken.end());
+        std::vector<VertexId> ids;
+        for (std::uint64_t i : taken)
+          for (int k = 0; k <= block.dim; ++k)
+            ids.push_back(local_id[block.entity(i)[k]]);
+        w.put<std::int32_t>(block.dim);
+        w.put(ids);
+        put_arrays(w, block.data, taken);
+      }
       for (std::uint64_t v : verts)
         local_id[v] = kNoVertex;
       if (p == root)
@@ -505,6 +530,12 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
     pn.dim = r.get<std::int32_t>();
     pn.tag = r.get<std::int32_t>();
     pn.name = r.get_string();
+  }
+  m.entities.resize(r.get<std::uint64_t>());
+  for (Entities &block : m.entities) {
+    block.dim = r.get<std::int32_t>();
+    block.vertices = r.get_vector<VertexId>();
+    block.data = get_arrays(r);
   }
 
   std::vector<int> nb(others.begin(), others.end());
@@ -748,6 +779,14 @@ Mesh gather(const DistributedMesh &d, int root) {
   std::iota(all_c.begin(), all_c.end(), 0);
   put_arrays(w, m.point_data, all_v);
   put_arrays(w, m.cell_data, all_c);
+  w.put<std::uint64_t>(m.entities.size());
+  for (const Entities &block : m.entities) {
+    w.put<std::int32_t>(block.dim);
+    w.put(block.vertices);
+    std::vector<std::uint64_t> all_e(block.size());
+    std::iota(all_e.begin(), all_e.end(), 0);
+    put_arrays(w, block.data, all_e);
+  }
   if (d.rank != root) {
     send_bytes(w.bytes, root, d.comm.get());
     return Mesh{};
@@ -764,6 +803,7 @@ Mesh gather(const DistributedMesh &d, int root) {
     std::vector<VertexId> cells;
     std::vector<std::uint8_t> stage, tag;
     std::vector<DataArray> point_data, cell_data;
+    std::vector<Entities> entities;
   };
   std::vector<Part> parts(std::size_t(d.size));
   for (int p = 0; p < d.size; ++p) {
@@ -777,6 +817,12 @@ Mesh gather(const DistributedMesh &d, int root) {
     part.tag = r.get_vector<std::uint8_t>();
     part.point_data = get_arrays(r);
     part.cell_data = get_arrays(r);
+    part.entities.resize(r.get<std::uint64_t>());
+    for (Entities &block : part.entities) {
+      block.dim = r.get<std::int32_t>();
+      block.vertices = r.get_vector<VertexId>();
+      block.data = get_arrays(r);
+    }
   }
   // Input vertices first, at their input ids (every input vertex is in some
   // part: prepare_input refuses unused vertices... or they were dropped).
@@ -874,6 +920,50 @@ Mesh gather(const DistributedMesh &d, int root) {
                                    in.values.begin() + (ref.c + 1) * k);
     }
   }
+  // Entities by their sorted ids in g; one on the border of two parts is
+  // in both, and kept from the lowest (with its multiplicity there).
+  for (std::size_t b = 0; b < m.entities.size(); ++b) {
+    Entities block;
+    block.dim = m.entities[b].dim;
+    for (const DataArray &a : parts[0].entities[b].data)
+      block.data.push_back({a.name, a.components, {}, a.type});
+    struct EntityRef {
+      FaceKey key;
+      int part;
+      std::size_t i;
+    };
+    std::vector<EntityRef> erefs;
+    for (int p = 0; p < d.size; ++p) {
+      const Entities &e = parts[std::size_t(p)].entities[b];
+      for (std::size_t i = 0; i < e.size(); ++i) {
+        VertexId ids[4];
+        for (int k = 0; k <= e.dim; ++k)
+          ids[k] = id_in_g[std::size_t(p)][e.entity(i)[k]];
+        erefs.push_back({face_key(ids, e.dim + 1), p, i});
+      }
+    }
+    std::stable_sort(erefs.begin(), erefs.end(), [](const EntityRef &x, const EntityRef &y) {
+      return x.key.ids != y.key.ids ? x.key.ids < y.key.ids : x.part < y.part;
+    });
+    int first_part = -1;
+    for (std::size_t j = 0; j < erefs.size(); ++j) {
+      const EntityRef &ref = erefs[j];
+      if (j == 0 || !(erefs[j - 1].key == ref.key))
+        first_part = ref.part;
+      if (ref.part != first_part)
+        continue; // another part's copy of an entity on a border
+      const Entities &e = parts[std::size_t(ref.part)].entities[b];
+      for (int k = 0; k <= e.dim; ++k)
+        block.vertices.push_back(id_in_g[std::size_t(ref.part)][e.entity(ref.i)[k]]);
+      for (std::size_t a = 0; a < block.data.size(); ++a) {
+        const std::size_t k = std::size_t(e.data[a].components);
+        block.data[a].values.insert(block.data[a].values.end(),
+                                    e.data[a].values.begin() + ref.i * k,
+                                    e.data[a].values.begin() + (ref.i + 1) * k);
+      }
+    }
+    g.entities.push_back(std::move(block));
+  }
   return g;
 }
 
@@ -885,12 +975,18 @@ namespace {
 // Points, as PDataArray lines (the piece's header is plain XML up to its
 // appended data).
 std::string parallel_declarations(const std::string &piece) {
+  // The piece's tags, without the arrays' data: every line up to </Points>
+  // that opens or closes an element of interest.
   std::ifstream in(piece, std::ios::binary);
-  std::string head(1 << 16, '\0');
-  in.read(head.data(), std::streamsize(head.size()));
-  head.resize(std::size_t(in.gcount()));
-  const std::size_t end = head.find("<AppendedData");
-  head = head.substr(0, end);
+  std::string head, line;
+  while (std::getline(in, line)) {
+    const std::size_t lt = line.find('<');
+    if (lt == std::string::npos || line.compare(lt, 9, "<Appended") == 0)
+      continue;
+    head += line.substr(lt, line.find('>', lt) + 1 - lt) + "\n";
+    if (line.find("</Points>") != std::string::npos)
+      break;
+  }
   std::string out;
   for (const char *section : {"PointData", "CellData", "Points"}) {
     const std::size_t a = head.find(std::string("<") + section);
