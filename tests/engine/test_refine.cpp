@@ -423,3 +423,80 @@ TEST_CASE("pinched meshes: cells meeting only at a vertex or an edge are accepte
       REQUIRE(decode_state(copy, "pinched.vtu"));
     }
 }
+
+namespace {
+
+// The cells of m as sorted tuples of their vertices' coordinates.
+std::vector<std::vector<double>> cells_by_coordinates(const Mesh &m) {
+  std::vector<std::vector<double>> cells;
+  for (std::size_t c = 0; c < m.num_cells(); ++c) {
+    std::vector<std::vector<double>> pts;
+    for (int i = 0; i <= m.dim; ++i)
+      pts.emplace_back(m.point(m.cell(CellId(c))[i]), m.point(m.cell(CellId(c))[i]) + m.dim);
+    std::sort(pts.begin(), pts.end());
+    std::vector<double> key;
+    for (const auto &p : pts)
+      key.insert(key.end(), p.begin(), p.end());
+    cells.push_back(key);
+  }
+  std::sort(cells.begin(), cells.end());
+  return cells;
+}
+
+} // namespace
+
+TEST_CASE("refine with edges to split: bisecting the edges a selection bisected gives its mesh",
+          "[refine][split]") {
+  // What distributed refinement relies on (distributed.hpp): the smallest
+  // conforming refinement that bisects given edges. Splitting exactly the
+  // edges a serial refinement bisected gives the serial mesh.
+  for (const char *name : {"square.msh", "ball.msh"}) {
+    for (Marking mk : kMarkings) {
+      INFO(name << ", marking " << marking_name(mk));
+      Mesh m0 = load(name);
+      mark_mesh(m0, mk);
+      m0.entities.clear();
+      const Invariants inv = measure_invariants(m0);
+      Mesh serial = m0;
+      const std::size_t nv0 = serial.num_vertices();
+      const std::vector<CellId> sel{0, CellId(serial.num_cells() / 2)};
+      refine(serial, sel);
+      std::vector<std::array<VertexId, 2>> edges;
+      for (std::size_t v = nv0; v < serial.num_vertices(); ++v)
+        if (serial.parent_edge[2 * v] < nv0 && serial.parent_edge[2 * v + 1] < nv0)
+          edges.push_back({serial.parent_edge[2 * v], serial.parent_edge[2 * v + 1]});
+      REQUIRE(edges.size() >= 2);
+      Mesh split = m0;
+      const RefineResult r = refine(split, {}, edges);
+      REQUIRE(!r.limit_reached);
+      REQUIRE_CONFORMING(split, inv);
+      REQUIRE(cells_by_coordinates(split) == cells_by_coordinates(serial));
+      // The split edges are gone: no cell holds both ends of one.
+      bool held = false;
+      for (std::size_t c = 0; c < split.num_cells(); ++c)
+        for (const auto &e : edges) {
+          const VertexId *x = split.cell(CellId(c));
+          const bool a = std::find(x, x + split.dim + 1, e[0]) != x + split.dim + 1;
+          const bool b = std::find(x, x + split.dim + 1, e[1]) != x + split.dim + 1;
+          held |= a && b;
+        }
+      REQUIRE(!held);
+      // An edge no cell holds (two far apart vertices) changes nothing.
+      Mesh none = m0;
+      VertexId far = 0;
+      double best = 0;
+      for (std::size_t v = 1; v < none.num_vertices(); ++v) {
+        double d2 = 0;
+        for (int k = 0; k < none.dim; ++k)
+          d2 += std::pow(none.point(VertexId(v))[k] - none.point(0)[k], 2);
+        if (d2 > best) {
+          best = d2;
+          far = VertexId(v);
+        }
+      }
+      refine(none, {}, {{0, far}});
+      REQUIRE(none.num_cells() == m0.num_cells());
+      REQUIRE(none.num_vertices() == m0.num_vertices());
+    }
+  }
+}

@@ -1,0 +1,69 @@
+# The invariant of distributed refinement (README, "MPI"): under mpirun with
+# P = 1, 2, 3, 4 ranks (oversubscribed on 2 cores), in 2D, 3D and 4D, with
+# every marking, from meshes with and without bisection state and tags, the
+# result's cells, as sets of vertex coordinates, are the serial run's. Read
+# back with VTK's parallel reader (the .pvtu, as ParaView opens it) and its
+# serial one (the gathered .vtu). The gathered file is the same bytes for
+# every P > 1, and its tagged entities are the serial run's.
+# $1: the bisect of a -DBISECT_MPI=ON build; $2: the source tree.
+source "$(dirname "$0")/../cli/lib.bash"
+cd "$WORK"
+R=$ROOT/data/regions
+same=$ROOT/tests/mpi/same_cells.py
+run_mpi() { # P ARGS...
+  local p=$1; shift
+  mpirun --allow-run-as-root --oversubscribe -np "$p" "$BISECT" "$@"
+}
+"$BISECT" generate kuhn --dim 2 --cells 4 -o square.vtu -q
+"$BISECT" generate kuhn --dim 3 --cells 2 -o cube.vtu -q
+"$BISECT" generate kuhn --dim 4 --cells 1 -o hypercube.vtu -q
+echo '{"type": "sphere", "center": [0.3, 0.4, 0.2], "radius": 0.25}' >sphere.json
+# A file that carries bisection state: the ball refined once everywhere.
+"$BISECT" refine "$ROOT/data/ball.msh" --region "$R/everything3d.json" -o ball-state.vtu -q \
+  --quality-csv none
+cases=(
+  "square.vtu $R/circle.json 8 index"
+  "square.vtu $R/circle.json 8 longest"
+  "square.vtu $R/circle.json 8 sorted"
+  "cube.vtu sphere.json 6 index"
+  "cube.vtu sphere.json 6 longest"
+  "cube.vtu sphere.json 6 sorted"
+  "$ROOT/data/ball.msh $R/hemisphere.json 2 index"
+  "ball-state.vtu $R/hemisphere.json 1 longest"
+  "$ROOT/data/box-tagged.msh $R/hemisphere.json 2 index"
+  "hypercube.vtu $R/moving-sphere.json 7 index"
+  "hypercube.vtu $R/moving-sphere.json 7 longest"
+  "hypercube.vtu $R/moving-sphere.json 6 sorted"
+)
+n=0
+for c in "${cases[@]}"; do
+  read -r mesh region iters marking <<<"$c"
+  expect_exit 0 "$BISECT" refine "$mesh" --region "$region" -n "$iters" -m "$marking" \
+    -o serial.vtu --quality-csv none -q -f
+  serial_info=$("$BISECT" info serial.vtu | grep -E '^(cells|vertices|tagged)')
+  for p in 1 2 3 4; do
+    expect_exit 0 run_mpi "$p" refine "$mesh" --region "$region" -n "$iters" -m "$marking" \
+      -o parts.pvtu --quality-csv none -q -f
+    [[ $(ls parts_*.vtu | wc -l) == "$p" ]] || fail "$c, P=$p: not $p pieces"
+    /usr/bin/python3 "$same" serial.vtu parts.pvtu >same.txt || { cat same.txt >&2; fail "$c, P=$p: the .pvtu's cells differ from the serial run's"; }
+    expect_exit 0 run_mpi "$p" refine "$mesh" --region "$region" -n "$iters" -m "$marking" \
+      -o gathered-$p.vtu --quality-csv none -q -f
+    /usr/bin/python3 "$same" serial.vtu gathered-$p.vtu >same.txt || { cat same.txt >&2; fail "$c, P=$p: the gathered cells differ from the serial run's"; }
+    [[ $("$BISECT" info gathered-$p.vtu | grep -E '^(cells|vertices|tagged)') == "$serial_info" ]] ||
+      fail "$c, P=$p: bisect info of the gathered mesh differs from the serial run's"
+    # (P = 1 with a .vtu output is the serial run itself)
+    ((p <= 2)) || cmp -s gathered-2.vtu gathered-$p.vtu ||
+      fail "$c: the gathered file for P=$p differs from P=2's"
+    rm -f parts_*.vtu
+    n=$((n + 1))
+  done
+done
+# The gathered file continues the sequence: refining it serially gives what
+# refining the serial output does.
+"$BISECT" refine square.vtu --region "$R/circle.json" -n 3 -m longest -o a.vtu -q -f --quality-csv none
+expect_exit 0 run_mpi 3 refine square.vtu --region "$R/circle.json" -n 3 -m longest -o b.vtu -q -f \
+  --quality-csv none
+"$BISECT" refine a.vtu --region "$R/circle.json" -n 2 -o a2.vtu -q -f --quality-csv none
+"$BISECT" refine b.vtu --region "$R/circle.json" -n 2 -o b2.vtu -q -f --quality-csv none
+/usr/bin/python3 "$same" a2.vtu b2.vtu >same.txt || { cat same.txt >&2; fail "continuing a gathered file differs"; }
+echo "mpi invariant: $n distributed runs (P = 1..4) equal to the serial ones, as .pvtu and gathered"
