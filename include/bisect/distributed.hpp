@@ -49,7 +49,9 @@ struct DistributedMesh {
   // This rank's cells, with their bisection state, cell and point data. Its
   // input vertices come first, in increasing input id (so that the global
   // edge order of the marking compares them as in the whole mesh), then the
-  // vertices refinement made. No tree (mesh.hpp): coarsening is serial.
+  // vertices refinement made. The tree (mesh.hpp) is kept where it is
+  // local: a vertex whose parents are in another part has kNoVertex parents
+  // here (the root keeps the input's tree for gather()).
   Mesh local;
   std::vector<std::uint64_t> input_vertex; // per input vertex of `local`: its id in the input
   std::vector<std::uint64_t> input_cell;   // per cell of the part as given: its input id
@@ -57,6 +59,9 @@ struct DistributedMesh {
   // superset: a vertex made on an edge gets the ranks both ends have.
   std::vector<std::vector<int>> sharers;
   std::vector<int> neighbours; // sorted: every rank in some sharers list
+  // On the root, when the input had a tree: its parent_edge and level.
+  std::vector<VertexId> input_parent_edge;
+  std::vector<std::uint16_t> input_level;
   std::size_t global_cells = 0, global_vertices = 0;
 };
 
@@ -94,14 +99,16 @@ void count_global(DistributedMesh &d);
 CheckResult check_refined(const DistributedMesh &d, const Invariants &part_original,
                           const Invariants &original);
 
-// The whole mesh on `root` (elsewhere an empty mesh): input vertices in input
-// order, then the made ones in lexicographic order of their coordinates;
-// cells in increasing order of their sorted vertex ids. So the gathered
-// mesh is the same file for every number of ranks. Collective.
+// The whole mesh on `root` (elsewhere an empty mesh), with its tree: input
+// vertices in input order, then the made ones by level (the iteration that
+// made them), then after their parents, then in lexicographic order of their
+// coordinates; cells in increasing order of their sorted vertex ids. So the
+// gathered mesh is the same file for every number of ranks. Collective.
 Mesh gather(const DistributedMesh &d, int root);
 
 // Writes `path` (.pvtu) on rank 0 and one piece per rank beside it,
-// <stem>_<rank>.vtu, with the bisection state: VTK's parallel reader (the
+// <stem>_<rank>.vtu, with the bisection state (not the tree: a piece may
+// lack a vertex's parents; gather to coarsen later): VTK's parallel reader (the
 // one ParaView uses) reads it. Every file is written to a temporary name and
 // renamed only when all ranks have written theirs. Existing files are
 // replaced only with `force`. Collective; throws InputError on every rank

@@ -472,6 +472,24 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
         w.put<std::int32_t>(pn.tag);
         w.put(pn.name);
       }
+      // The tree, where the part holds a vertex's parents.
+      w.put<std::uint8_t>(mesh.has_tree());
+      if (mesh.has_tree()) {
+        std::vector<std::uint16_t> generation, level;
+        std::vector<VertexId> parents;
+        for (std::uint64_t c : cells)
+          generation.push_back(mesh.generation[c]);
+        for (std::uint64_t v : verts) {
+          const VertexId a = mesh.parent_edge[2 * v], b = mesh.parent_edge[2 * v + 1];
+          const bool here = a != kNoVertex && local_id[a] != kNoVertex && local_id[b] != kNoVertex;
+          parents.push_back(here ? local_id[a] : kNoVertex);
+          parents.push_back(here ? local_id[b] : kNoVertex);
+          level.push_back(mesh.level.size() == nv ? mesh.level[v] : std::uint16_t(a != kNoVertex));
+        }
+        w.put(generation);
+        w.put(parents);
+        w.put(level);
+      }
       w.put<std::uint64_t>(mesh.entities.size());
       for (std::size_t b = 0; b < mesh.entities.size(); ++b) {
         const Entities &block = mesh.entities[b];
@@ -531,11 +549,25 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
     pn.tag = r.get<std::int32_t>();
     pn.name = r.get_string();
   }
+  if (r.get<std::uint8_t>()) {
+    m.generation = r.get_vector<std::uint16_t>();
+    m.parent_edge = r.get_vector<VertexId>();
+    m.level = r.get_vector<std::uint16_t>();
+  }
   m.entities.resize(r.get<std::uint64_t>());
   for (Entities &block : m.entities) {
     block.dim = r.get<std::int32_t>();
     block.vertices = r.get_vector<VertexId>();
     block.data = get_arrays(r);
+  }
+  if (d.rank == root && mesh.has_tree()) {
+    d.input_parent_edge = mesh.parent_edge;
+    d.input_level = mesh.level.size() == mesh.num_vertices()
+                        ? mesh.level
+                        : std::vector<std::uint16_t>(mesh.num_vertices(), 0);
+    if (mesh.level.size() != mesh.num_vertices())
+      for (std::size_t v = 0; v < mesh.num_vertices(); ++v)
+        d.input_level[v] = mesh.parent_edge[2 * v] != kNoVertex;
   }
 
   std::vector<int> nb(others.begin(), others.end());
@@ -564,6 +596,13 @@ DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &se
     index.add(VertexId(v));
   std::size_t bisections = 0;
   bool precision = false;
+  // The iteration's vertices all get one level (each refine() call below
+  // would count itself one), the same on every rank.
+  int newest = m.level.empty() ? 0 : *std::max_element(m.level.begin(), m.level.end());
+  int level = 0;
+  MPI_Allreduce(&newest, &level, 1, MPI_INT, MPI_MAX, d.comm.get());
+  level = std::min(level + 1, int(std::numeric_limits<std::uint16_t>::max()));
+  const std::size_t first_new = m.num_vertices();
   std::size_t made_from = m.num_vertices();
   RefineResult r = refine(m, selected);
   bisections += r.bisections;
@@ -615,8 +654,8 @@ DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &se
   result.precision_reached = any_rank(precision, d.comm.get());
   result.selected = sum_ranks(selected.size(), d.comm.get());
   result.bisections = sum_ranks(bisections, d.comm.get());
-  // The parts keep no tree: each refine() call above started one.
-  m.clear_tree();
+  for (std::size_t v = first_new; v < m.level.size(); ++v)
+    m.level[v] = std::uint16_t(level);
   count_global(d);
   return result;
 }
@@ -787,6 +826,12 @@ Mesh gather(const DistributedMesh &d, int root) {
     std::iota(all_e.begin(), all_e.end(), 0);
     put_arrays(w, block.data, all_e);
   }
+  w.put<std::uint8_t>(m.has_tree());
+  if (m.has_tree()) {
+    w.put(m.generation);
+    w.put(m.parent_edge);
+    w.put(m.level);
+  }
   if (d.rank != root) {
     send_bytes(w.bytes, root, d.comm.get());
     return Mesh{};
@@ -804,6 +849,8 @@ Mesh gather(const DistributedMesh &d, int root) {
     std::vector<std::uint8_t> stage, tag;
     std::vector<DataArray> point_data, cell_data;
     std::vector<Entities> entities;
+    std::vector<std::uint16_t> generation, level;
+    std::vector<VertexId> parent_edge;
   };
   std::vector<Part> parts(std::size_t(d.size));
   for (int p = 0; p < d.size; ++p) {
@@ -823,6 +870,11 @@ Mesh gather(const DistributedMesh &d, int root) {
       block.vertices = r.get_vector<VertexId>();
       block.data = get_arrays(r);
     }
+    if (r.get<std::uint8_t>()) {
+      part.generation = r.get_vector<std::uint16_t>();
+      part.parent_edge = r.get_vector<VertexId>();
+      part.level = r.get_vector<std::uint16_t>();
+    }
   }
   // Input vertices first, at their input ids (every input vertex is in some
   // part: prepare_input refuses unused vertices... or they were dropped).
@@ -830,6 +882,8 @@ Mesh gather(const DistributedMesh &d, int root) {
   for (const Part &p : parts)
     for (std::uint64_t v : p.input_vertex)
       inputs = std::max(inputs, v + 1);
+  // Made vertices: one per distinct point (a representative part's copy:
+  // every part holding a made vertex made it, so its parents are there).
   struct Made {
     int part;
     VertexId v;
@@ -845,26 +899,102 @@ Mesh gather(const DistributedMesh &d, int root) {
   std::sort(made.begin(), made.end(), [&](const Made &a, const Made &b) {
     return std::lexicographical_compare(point(a), point(a) + dim, point(b), point(b) + dim);
   });
-  // Made vertices: one per distinct point.
-  std::vector<std::vector<VertexId>> id_in_g(std::size_t(d.size));
+  std::vector<std::vector<VertexId>> unique_of(std::size_t(d.size)); // part vertex -> unique
   for (int p = 0; p < d.size; ++p)
-    id_in_g[std::size_t(p)].assign(parts[std::size_t(p)].coords.size() / std::size_t(dim),
-                                   kNoVertex);
+    unique_of[std::size_t(p)].assign(parts[std::size_t(p)].coords.size() / std::size_t(dim),
+                                     kNoVertex);
+  std::vector<Made> unique;
+  for (std::size_t i = 0; i < made.size(); ++i) {
+    if (i == 0 || !std::equal(point(made[i]), point(made[i]) + dim, point(made[i - 1])))
+      unique.push_back(made[i]);
+    unique_of[std::size_t(made[i].part)][made[i].v] = VertexId(unique.size() - 1);
+  }
+  // Their order: by level, then after their parents of the same level (the
+  // height: 0 when none is, else one more than the highest), then by
+  // coordinates (the order of `unique`). Parents' ids are then smaller, as
+  // the tree's arrays in files require.
+  const bool tree = !parts[0].parent_edge.empty();
+  std::vector<std::uint16_t> level_of(unique.size(), 1);
+  std::vector<int> height(unique.size(), tree ? -1 : 0);
+  auto parent_unique = [&](const Made &x, int k) -> VertexId {
+    const Part &part = parts[std::size_t(x.part)];
+    const VertexId a = part.parent_edge[2 * std::size_t(x.v) + std::size_t(k)];
+    return a == kNoVertex || a < part.input_vertex.size() ? kNoVertex
+                                                          : unique_of[std::size_t(x.part)][a];
+  };
+  if (tree) {
+    for (std::size_t u = 0; u < unique.size(); ++u)
+      level_of[u] = parts[std::size_t(unique[u].part)].level[unique[u].v];
+    std::vector<VertexId> stack;
+    for (std::size_t u0 = 0; u0 < unique.size(); ++u0) {
+      stack.assign(1, VertexId(u0));
+      while (!stack.empty()) {
+        const VertexId u = stack.back();
+        if (height[u] >= 0) {
+          stack.pop_back();
+          continue;
+        }
+        int h = 0;
+        bool ready = true;
+        for (int k = 0; k < 2; ++k) {
+          const VertexId q = parent_unique(unique[u], k);
+          if (q == kNoVertex || level_of[q] != level_of[u])
+            continue;
+          if (height[q] < 0) {
+            stack.push_back(q);
+            ready = false;
+          } else {
+            h = std::max(h, height[q] + 1);
+          }
+        }
+        if (ready) {
+          height[u] = h;
+          stack.pop_back();
+        }
+      }
+    }
+  }
+  std::vector<VertexId> order(unique.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](VertexId a, VertexId b) {
+    return level_of[a] != level_of[b] ? level_of[a] < level_of[b] : height[a] < height[b];
+  });
+  std::vector<VertexId> g_of_unique(unique.size());
+  for (std::size_t i = 0; i < order.size(); ++i)
+    g_of_unique[order[i]] = VertexId(inputs + i);
+  std::vector<std::vector<VertexId>> id_in_g(std::size_t(d.size));
   std::vector<std::pair<int, VertexId>> source(inputs, {-1, 0}); // g vertex -> a part's vertex
   for (int p = 0; p < d.size; ++p) {
     const Part &part = parts[std::size_t(p)];
+    id_in_g[std::size_t(p)].assign(part.coords.size() / std::size_t(dim), kNoVertex);
     for (std::size_t v = 0; v < part.input_vertex.size(); ++v) {
       id_in_g[std::size_t(p)][v] = VertexId(part.input_vertex[v]);
       source[part.input_vertex[v]] = {p, VertexId(v)};
     }
+    for (std::size_t v = part.input_vertex.size(); v < id_in_g[std::size_t(p)].size(); ++v)
+      id_in_g[std::size_t(p)][v] = g_of_unique[unique_of[std::size_t(p)][v]];
   }
-  std::size_t next = inputs;
-  for (std::size_t i = 0; i < made.size(); ++i) {
-    if (i == 0 || !std::equal(point(made[i]), point(made[i]) + dim, point(made[i - 1]))) {
-      source.push_back({made[i].part, made[i].v});
-      ++next;
+  for (VertexId u : order)
+    source.push_back({unique[u].part, unique[u].v});
+  if (tree) {
+    g.parent_edge.assign(2 * source.size(), kNoVertex);
+    g.level.assign(source.size(), 0);
+    for (std::size_t v = 0; v < inputs && v < d.input_level.size(); ++v) {
+      g.parent_edge[2 * v] = d.input_parent_edge[2 * v];
+      g.parent_edge[2 * v + 1] = d.input_parent_edge[2 * v + 1];
+      g.level[v] = d.input_level[v];
     }
-    id_in_g[std::size_t(made[i].part)][made[i].v] = VertexId(next - 1);
+    for (std::size_t v = inputs; v < source.size(); ++v) {
+      const Part &part = parts[std::size_t(source[v].first)];
+      for (int k = 0; k < 2; ++k)
+        g.parent_edge[2 * v + std::size_t(k)] =
+            id_in_g[std::size_t(source[v].first)]
+                   [part.parent_edge[2 * std::size_t(source[v].second) + std::size_t(k)]];
+      g.level[v] = part.level[source[v].second];
+      // Parts may have made it from either end first: smaller id first.
+      if (g.parent_edge[2 * v] > g.parent_edge[2 * v + 1])
+        std::swap(g.parent_edge[2 * v], g.parent_edge[2 * v + 1]);
+    }
   }
   g.coords.resize(source.size() * std::size_t(dim), 0.0);
   for (std::size_t v = 0; v < source.size(); ++v)
@@ -913,6 +1043,8 @@ Mesh gather(const DistributedMesh &d, int root) {
       g.cells.push_back(id_in_g[std::size_t(ref.part)][part.cells[ref.c * std::size_t(n) + i]]);
     g.stage.push_back(Stage(part.stage[ref.c]));
     g.tag.push_back(part.tag[ref.c]);
+    if (tree)
+      g.generation.push_back(part.generation[ref.c]);
     for (std::size_t a = 0; a < g.cell_data.size(); ++a) {
       const DataArray &in = part.cell_data[a];
       const std::size_t k = std::size_t(in.components);
@@ -1030,7 +1162,22 @@ void write_pvtu(const std::string &path, DistributedMesh &d, bool force,
         h_pvtu = outputs.add(path);
       WriteOptions o = options;
       o.format = "vtu";
-      write_mesh_file_with_state(outputs.file(h_piece), piece, d.local, o);
+      // Without the tree (see distributed.hpp), put back after writing.
+      std::vector<std::uint16_t> generation = std::move(d.local.generation),
+                                 level = std::move(d.local.level);
+      std::vector<VertexId> parents = std::move(d.local.parent_edge);
+      d.local.clear_tree();
+      try {
+        write_mesh_file_with_state(outputs.file(h_piece), piece, d.local, o);
+      } catch (...) {
+        d.local.generation = std::move(generation);
+        d.local.level = std::move(level);
+        d.local.parent_edge = std::move(parents);
+        throw;
+      }
+      d.local.generation = std::move(generation);
+      d.local.level = std::move(level);
+      d.local.parent_edge = std::move(parents);
       if (d.rank == 0) {
         std::ostringstream x;
         x << "<?xml version=\"1.0\"?>\n"

@@ -1,5 +1,5 @@
 # The layers' direction (README, "Source map"): core <- measure <- engine <-
-# io; engine <- region, tools. The linker enforces it for symbols (each layer
+# io <- mpi; engine <- region, tools. The linker enforces it for symbols (each layer
 # is a shared library linked with --no-undefined against the layers below it
 # only); this checks the includes: no file of a layer includes a header of a
 # layer above it or beside it.
@@ -13,6 +13,7 @@ declare -A layer_of=(
   [io]=io [state]=io [output]=io
   [region]=region
   [colour]=tools [extrude]=tools [slice]=tools [generate]=tools [bisect]=all
+  [distributed]=mpi
 )
 # What each layer may include.
 declare -A allowed=(
@@ -22,6 +23,7 @@ declare -A allowed=(
   [io]="core measure engine io"
   [region]="core measure engine region"
   [tools]="core measure engine tools"
+  [mpi]="core measure engine io mpi"
 )
 bad=0
 check_file() { # FILE LAYER
@@ -29,7 +31,7 @@ check_file() { # FILE LAYER
   while read -r inc; do
     case $inc in
       bisect/*.hpp) l=${layer_of[$(basename "$inc" .hpp)]:-unknown} ;;
-      core/* | measure/* | engine/* | io/* | region/* | tools/*) l=${inc%%/*} ;;
+      core/* | measure/* | engine/* | io/* | region/* | tools/* | mpi/*) l=${inc%%/*} ;;
       *) continue ;;
     esac
     if [[ " ${allowed[$layer]} " != *" $l "* ]]; then
@@ -39,7 +41,7 @@ check_file() { # FILE LAYER
   done < <(sed -n 's/^#include "\(.*\)".*/\1/p' "$file")
 }
 n=0
-for layer in core measure engine io region tools; do
+for layer in core measure engine io region tools mpi; do
   for f in src/$layer/*.cpp src/$layer/*.hpp; do
     [[ -e $f ]] || continue
     check_file "$f" "$layer"

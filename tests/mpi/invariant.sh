@@ -66,4 +66,16 @@ expect_exit 0 run_mpi 3 refine square.vtu --region "$R/circle.json" -n 3 -m long
 "$BISECT" refine a.vtu --region "$R/circle.json" -n 2 -o a2.vtu -q -f --quality-csv none
 "$BISECT" refine b.vtu --region "$R/circle.json" -n 2 -o b2.vtu -q -f --quality-csv none
 /usr/bin/python3 "$same" a2.vtu b2.vtu >same.txt || { cat same.txt >&2; fail "continuing a gathered file differs"; }
+# The gathered file carries the bisection tree: coarsening it undoes what
+# coarsening the serial output undoes (tests the tree's parents and levels).
+for c in "cube.vtu sphere.json 5" "$ROOT/data/ball.msh $R/hemisphere.json 3" "hypercube.vtu $R/moving-sphere.json 6"; do
+  read -r mesh region iters <<<"$c"
+  "$BISECT" refine "$mesh" --region "$region" -n "$iters" -o s.vtu -q -f --quality-csv none
+  expect_exit 0 run_mpi 3 refine "$mesh" --region "$region" -n "$iters" -o g.vtu -q -f --quality-csv none
+  "$BISECT" coarsen s.vtu --all -n 2 -o sc.vtu -q -f
+  expect_exit 0 "$BISECT" coarsen g.vtu --all -n 2 -o gc.vtu -q -f
+  /usr/bin/python3 "$same" sc.vtu gc.vtu >same.txt || { cat same.txt >&2; fail "$c: coarsening the gathered file differs"; }
+  cells() { "$BISECT" info "$1" | sed -n 's/^cells: //p'; }
+  (($(cells gc.vtu) < $(cells g.vtu))) || fail "$c: coarsening the gathered file removed nothing"
+done
 echo "mpi invariant: $n distributed runs (P = 1..4) equal to the serial ones, as .pvtu and gathered"
