@@ -91,13 +91,19 @@ QualitySummary quality_summary(const DistributedMesh &d);
 void count_global(DistributedMesh &d);
 
 // The final check across ranks (collective; the same answer on every rank):
-// check_refined on each part against the part's own invariants as
-// distributed (`part_original`), then every facet a part has alone must be
-// matched by exactly one other part's, or be on the input's boundary: the
-// sum of the unmatched facets' measures must equal `original`'s boundary
-// measure, and the parts' volumes its volume.
+// check_refined (check.hpp) on each part against the part's own invariants
+// as distributed (`part_original`: refinement keeps a part's volume and
+// boundary measure, the boundary with other parts included), then the
+// border between parts: the facets a part has alone there, matched by their
+// vertices' coordinates against its neighbours', must cover what
+// border_measure() gave when the parts were made (`border_original`). A facet
+// split on one side only leaves halves that match nothing, so the matched
+// measure falls short. Only border cells are looked at beyond the part's own
+// check.
 CheckResult check_refined(const DistributedMesh &d, const Invariants &part_original,
-                          const Invariants &original);
+                          double border_original);
+// The measure of this part's border with other parts (collective).
+double border_measure(const DistributedMesh &d);
 
 // The whole mesh on `root` (elsewhere an empty mesh), with its tree: input
 // vertices in input order, then the made ones by level (the iteration that
