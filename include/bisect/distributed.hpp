@@ -112,6 +112,19 @@ double border_measure(const DistributedMesh &d);
 // gathered mesh is the same file for every number of ranks. Collective.
 Mesh gather(const DistributedMesh &d, int root);
 
+// The largest part's cells over the mean (1: balanced). Collective.
+double imbalance(const DistributedMesh &d);
+// When the largest part exceeds the mean by more than `tolerance` (0.1:
+// 10%), makes the parts again along the Hilbert curve through the cells as
+// they are now, with their state, tree, tags and data; returns whether it
+// did. Collective. The cells move through the root (gather, then
+// distribute): simple and exact, but the root holds the whole mesh while it
+// runs; there it passes check_refined against `original` (the input's
+// invariants) first, else CheckError on every rank. The parts' own
+// invariants and border_measure() must then be taken again. Explicit
+// marking keeps its parts (its edge ranks do not travel).
+bool rebalance(DistributedMesh &d, const Invariants &original, double tolerance = 0.1);
+
 // Writes `path` (.pvtu) on rank 0 and one piece per rank beside it,
 // <stem>_<rank>.vtu, with the bisection state (not the tree: a piece may
 // lack a vertex's parents; gather to coarsen later): VTK's parallel reader (the

@@ -1125,6 +1125,40 @@ Mesh gather(const DistributedMesh &d, int root) {
   return g;
 }
 
+// ---------------------------------------------------------------- balance
+
+double imbalance(const DistributedMesh &d) {
+  const std::uint64_t mine = d.local.num_cells();
+  std::uint64_t largest = 0, total = 0;
+  MPI_Allreduce(&mine, &largest, 1, MPI_UINT64_T, MPI_MAX, d.comm.get());
+  MPI_Allreduce(&mine, &total, 1, MPI_UINT64_T, MPI_SUM, d.comm.get());
+  return total ? double(largest) * double(d.size) / double(total) : 1.0;
+}
+
+bool rebalance(DistributedMesh &d, const Invariants &original, double tolerance) {
+  if (d.size == 1 || imbalance(d) <= 1 + tolerance || d.local.marking == Marking::Explicit)
+    return false;
+  Mesh whole = gather(d, 0);
+  // What passes through the root is checked there (the parts' own checks
+  // start again from the new parts).
+  std::string failure;
+  if (d.rank == 0) {
+    const CheckResult check = check_refined(whole, original);
+    if (!check.ok)
+      failure = check.failure.empty() ? "the gathered mesh fails the final check" : check.failure;
+  }
+  std::uint64_t len = failure.size();
+  MPI_Bcast(&len, 1, MPI_UINT64_T, 0, d.comm.get());
+  failure.resize(len);
+  MPI_Bcast(failure.data(), int(len), MPI_CHAR, 0, d.comm.get());
+  if (!failure.empty())
+    throw CheckError("before rebalancing: " + failure);
+  MPI_Comm comm = d.comm.get();
+  DistributedMesh fresh = distribute(whole, 0, comm);
+  d = std::move(fresh);
+  return true;
+}
+
 // ---------------------------------------------------------------- .pvtu
 
 namespace {

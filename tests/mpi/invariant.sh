@@ -58,6 +58,21 @@ for c in "${cases[@]}"; do
     n=$((n + 1))
   done
 done
+# Parts that grow unequal are made again (rebalance): the moving sphere
+# refines one end of the hypercube first.
+expect_exit 0 run_mpi 2 refine hypercube.vtu --region "$R/moving-sphere.json" -n 12 -o r.pvtu -q -f \
+  --quality-csv r.csv --json
+/usr/bin/python3 - "$WORK/out" r.csv <<'PY' || fail "no rebalance, or parts left unbalanced"
+import csv, json, sys
+j = json.load(open(sys.argv[1]))
+rows = list(csv.DictReader(open(sys.argv[2])))
+assert j["ranks"] == 2 and j["rebalances"] >= 1, j
+for r in rows[1:-1]:  # after every iteration but the last: at most 10% over the mean
+    assert float(r["imbalance_after_rebalance"]) <= 1.1, r
+assert any(float(r["imbalance"]) > 1.1 for r in rows), "the case never needed a rebalance"
+PY
+"$BISECT" refine hypercube.vtu --region "$R/moving-sphere.json" -n 12 -o s.vtu -q -f --quality-csv none
+/usr/bin/python3 "$same" s.vtu r.pvtu >same.txt || { cat same.txt >&2; fail "rebalanced run differs"; }
 # The gathered file continues the sequence: refining it serially gives what
 # refining the serial output does.
 "$BISECT" refine square.vtu --region "$R/circle.json" -n 3 -m longest -o a.vtu -q -f --quality-csv none

@@ -114,8 +114,8 @@ int run_refine_mpi(const DistributedArgs &a) {
     const std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
     DistributedMesh d = distribute(mesh, 0, MPI_COMM_WORLD);
     mesh = Mesh{};
-    const Invariants part_original = measure_invariants(d.local, false);
-    const double border_original = border_measure(d);
+    Invariants part_original = measure_invariants(d.local, false);
+    double border_original = border_measure(d);
     std::unique_ptr<Region> region = read_region(a.region, dim);
     if (!quiet)
       std::cerr << "bisect: " << a.input << ": " << dim << "D, " << with_commas(cells0)
@@ -124,16 +124,20 @@ int run_refine_mpi(const DistributedArgs &a) {
                 << "of " << with_commas(d.local.num_cells()) << " cells\n";
     std::ostringstream rows;
     rows << "iteration,cells,vertices,selected,bisections,min_quality,max_quality,mean_quality,"
-            "seconds,rounds\n";
+            "seconds,exchange_rounds,imbalance,imbalance_after_rebalance\n";
     auto row = [&](int it, std::size_t sel, std::size_t bis, const QualitySummary &q, double sec,
-                   int rounds) {
-      char buf[256];
-      std::snprintf(buf, sizeof buf, "%d,%zu,%zu,%zu,%zu,%.9g,%.9g,%.9g,%.6f,%d\n", it,
-                    d.global_cells, d.global_vertices, sel, bis, q.min, q.max, q.mean, sec, rounds);
+                   int rounds, double before, double after) {
+      char buf[320];
+      std::snprintf(buf, sizeof buf, "%d,%zu,%zu,%zu,%zu,%.9g,%.9g,%.9g,%.6f,%d,%.4f,%.4f\n", it,
+                    d.global_cells, d.global_vertices, sel, bis, q.min, q.max, q.mean, sec, rounds,
+                    before, after);
       rows << buf;
     };
     QualitySummary q = quality_summary(d);
-    row(0, 0, 0, q, 0.0, 0);
+    const double imbalance0 = imbalance(d);
+    row(0, 0, 0, q, 0.0, 0, imbalance0, imbalance0);
+    double rebalance_seconds = 0, worst_imbalance = imbalance0;
+    int rebalances = 0;
     std::size_t bisections = 0, selected_total = 0, edges_sent = 0;
     int rounds_total = 0, iterations = 0;
     double exchange_seconds = 0;
@@ -153,6 +157,20 @@ int run_refine_mpi(const DistributedArgs &a) {
         break;
       }
       q = quality_summary(d);
+      // Parts more than 10% above the mean are made again along the curve
+      // for the next iteration.
+      const auto t_balance = std::chrono::steady_clock::now();
+      const double before = imbalance(d);
+      // (not after the last iteration: nothing is refined after it)
+      const bool moved = it < a.iterations && rebalance(d, original, 0.1);
+      if (moved) {
+        part_original = measure_invariants(d.local, false);
+        border_original = border_measure(d);
+      }
+      const double after = moved ? imbalance(d) : before;
+      rebalance_seconds += seconds_since(t_balance);
+      rebalances += moved;
+      worst_imbalance = std::max(worst_imbalance, after);
       const double sec = seconds_since(t0);
       ++iterations;
       bisections += r.bisections;
@@ -160,15 +178,19 @@ int run_refine_mpi(const DistributedArgs &a) {
       rounds_total += r.rounds;
       edges_sent += r.edges_sent;
       exchange_seconds += r.exchange_seconds;
-      row(it, r.selected, r.bisections, q, sec, r.rounds);
+      row(it, r.selected, r.bisections, q, sec, r.rounds, before, after);
       if (!quiet) {
         char buf[320];
         std::snprintf(buf, sizeof buf,
                       "iteration %d/%d: %s cells, %s vertices, %s selected, %s bisections "
-                      "(%d exchange rounds), quality min %.4f max %.4f, %.2f s\n",
+                      "(%d exchange rounds), quality min %.4f max %.4f, largest part %.2fx "
+                      "the mean%s, %.2f s\n",
                       it, a.iterations, with_commas(d.global_cells).c_str(),
                       with_commas(d.global_vertices).c_str(), with_commas(r.selected).c_str(),
-                      with_commas(r.bisections).c_str(), r.rounds, q.min, q.max, sec);
+                      with_commas(r.bisections).c_str(), r.rounds, q.min, q.max, before,
+                      moved ? (" (rebalanced: " + std::to_string(after).substr(0, 4) + "x)").c_str()
+                            : "",
+                      sec);
         std::cerr << buf;
       }
     }
@@ -230,6 +252,9 @@ int run_refine_mpi(const DistributedArgs &a) {
       j["largest_part_cells"] = part_max;
       j["edges_sent_max_rank"] = sent_max;
       j["exchange_seconds_max_rank"] = exchange_max;
+      j["rebalances"] = rebalances;
+      j["rebalance_seconds"] = rebalance_seconds;
+      j["largest_imbalance_after_rebalance"] = worst_imbalance;
       j["min_quality"] = q.min;
       j["max_quality"] = q.max;
       j["mean_quality"] = q.mean;
