@@ -72,11 +72,13 @@ int run_refine(const RefineArgs &a) {
 #ifdef BISECT_MPI
   // Under mpirun, or for a .pvtu: the distributed refine (README, "MPI").
   if (mpi_world_size() > 1 || a.output.ends_with(".pvtu")) {
-    if (a.region.empty() || !a.indicator.empty() || a.depth != 1 || a.max_elements ||
-        a.max_memory_gib || !a.slices.empty() || a.check || a.output == "-" || !a.format.empty())
+    if (a.max_elements || a.max_memory_gib || !a.slices.empty() || a.check || a.output == "-" ||
+        !a.format.empty() || a.origin)
       throw UsageError("distributed refine (mpirun or a .pvtu output) takes --region, "
-                       "--iterations, --marking, --compression, --quality-csv, --origin, "
-                       "--force, --quiet and --json; the other options need a serial run");
+                       "--indicator with its rule, --depth, --iterations, --marking, "
+                       "--compression, --quality-csv, --force, --quiet and --json; "
+                       "--max-elements, --max-memory, --slices, --check, --origin, --format "
+                       "and -o - need a serial run");
     if (a.output.empty())
       throw UsageError("distributed refine needs -o (a .pvtu, or a .vtu/.msh to gather into)");
     DistributedArgs d;
@@ -85,6 +87,12 @@ int run_refine(const RefineArgs &a) {
     d.output = a.output;
     d.csv = !a.csv.empty() ? a.csv : default_csv(a.output);
     d.iterations = a.iterations;
+    d.depth = a.depth;
+    d.indicator = a.indicator;
+    d.rule = int(a.above ? IndicatorRule::Above
+                 : a.top ? IndicatorRule::Top
+                         : IndicatorRule::Dorfler);
+    d.parameter = a.above ? *a.above : a.top ? *a.top : a.dorfler ? *a.dorfler : 0.0;
     d.marking = marking;
     d.compression = a.compression == "lz4"    ? Compression::Lz4
                     : a.compression == "none" ? Compression::None
@@ -92,8 +100,6 @@ int run_refine(const RefineArgs &a) {
     d.force = a.force;
     d.quiet = a.flags.quiet;
     d.json = a.flags.json;
-    if (a.origin)
-      throw UsageError("--origin: not yet in a distributed refine");
     return run_refine_mpi(d);
   }
 #endif

@@ -85,6 +85,11 @@ struct DistributedRefineResult {
 // across all ranks. Collective.
 DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &selected);
 
+// refine_marked (driver.hpp) across ranks: each marked cell `depth`
+// generations down, then to conformity. Collective.
+DistributedRefineResult refine_marked(DistributedMesh &d, const std::vector<CellId> &marked,
+                                      int depth);
+
 // Global figures (collective): quality over all cells; cells and vertices
 // (shared vertices counted once).
 QualitySummary quality_summary(const DistributedMesh &d);

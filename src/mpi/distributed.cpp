@@ -1125,6 +1125,47 @@ Mesh gather(const DistributedMesh &d, int root) {
   return g;
 }
 
+DistributedRefineResult refine_marked(DistributedMesh &d, const std::vector<CellId> &marked,
+                                      int depth) {
+  if (depth <= 1)
+    return refine(d, marked);
+  // As refine_marked (driver.hpp): each marked cell's volume travels to its
+  // descendants as a cell array; a descendant fewer than `depth`
+  // generations down (by the volume ratio) is bisected again next round.
+  Mesh &m = d.local;
+  constexpr const char *kAncestor = "bisect:ancestor_volume";
+  auto volume = [&](CellId c) {
+    double pts[5 * 4];
+    cell_points(m, c, pts);
+    return std::abs(signed_volume(pts, m.dim));
+  };
+  m.cell_data.push_back({kAncestor, 1, std::vector<double>(m.num_cells(), 0.0)});
+  for (CellId c : marked)
+    m.cell_data.back().values.at(c) = volume(c);
+  DistributedRefineResult total;
+  std::vector<CellId> round = marked;
+  for (int r = 0; r < depth && any_rank(!round.empty(), d.comm.get()); ++r) {
+    const DistributedRefineResult step = refine(d, round);
+    if (r == 0)
+      total.selected = step.selected;
+    total.bisections += step.bisections;
+    total.rounds += step.rounds;
+    total.edges_sent += step.edges_sent;
+    total.exchange_seconds += step.exchange_seconds;
+    total.precision_reached |= step.precision_reached;
+    if (step.precision_reached)
+      break;
+    round.clear();
+    const DataArray &anc = *std::find_if(m.cell_data.begin(), m.cell_data.end(),
+                                         [&](const DataArray &a) { return a.name == kAncestor; });
+    for (std::size_t c = 0; c < m.num_cells(); ++c)
+      if (anc.values[c] > 0 && std::lround(std::log2(anc.values[c] / volume(CellId(c)))) < depth)
+        round.push_back(CellId(c));
+  }
+  std::erase_if(m.cell_data, [&](const DataArray &a) { return a.name == kAncestor; });
+  return total;
+}
+
 // ---------------------------------------------------------------- balance
 
 double imbalance(const DistributedMesh &d) {

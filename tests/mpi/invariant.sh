@@ -58,6 +58,41 @@ for c in "${cases[@]}"; do
     n=$((n + 1))
   done
 done
+# Marking by an indicator (--above, --top, --dorfler, with --depth): the
+# marks of the input's cells, as in the serial run, ties included. The
+# indicator is added with VTK's own writer (2D, 3D, 4D).
+for dim in 2 3 4; do
+  "$BISECT" generate kuhn --dim $dim --cells 3 -o k$dim.vtu -q
+  /usr/bin/python3 - k$dim.vtu eta$dim.vtu <<'PY'
+import sys, random, vtk
+r = vtk.vtkXMLUnstructuredGridReader(); r.SetFileName(sys.argv[1]); r.Update()
+g = r.GetOutput()
+random.seed(7)
+eta = vtk.vtkDoubleArray(); eta.SetName("eta")
+values = [random.random() for _ in range(g.GetNumberOfCells())]
+values[5] = values[6] = max(values)  # a tie: the lower input id goes first
+for v in values:
+    eta.InsertNextValue(v)
+g.GetCellData().AddArray(eta)
+w = vtk.vtkXMLUnstructuredGridWriter(); w.SetFileName(sys.argv[2]); w.SetInputData(g); w.Write()
+PY
+  for rule in "--above 0.7" "--top 0.1" "--dorfler 0.5" "--top 0.05 --depth 3"; do
+    # shellcheck disable=SC2086
+    "$BISECT" refine eta$dim.vtu --indicator eta $rule -o s.vtu -q -f --quality-csv none
+    for p in 2 3; do
+      # shellcheck disable=SC2086
+      expect_exit 0 run_mpi $p refine eta$dim.vtu --indicator eta $rule -o d.pvtu -q -f --quality-csv none
+      /usr/bin/python3 "$same" s.vtu d.pvtu >same.txt || { cat same.txt >&2; fail "${dim}D --indicator $rule, P=$p differs"; }
+      n=$((n + 1))
+    done
+  done
+  # With a region too: either marks a cell.
+  "$BISECT" refine eta$dim.vtu --indicator eta --top 0.1 --region "$R/everything${dim}d.json" \
+    -o s.vtu -q -f --quality-csv none 2>/dev/null || continue
+  expect_exit 0 run_mpi 2 refine eta$dim.vtu --indicator eta --top 0.1 --region "$R/everything${dim}d.json" \
+    -o d.pvtu -q -f --quality-csv none
+  /usr/bin/python3 "$same" s.vtu d.pvtu >same.txt || { cat same.txt >&2; fail "${dim}D indicator + region differs"; }
+done
 # Parts that grow unequal are made again (rebalance): the moving sphere
 # refines one end of the hypercube first.
 expect_exit 0 run_mpi 2 refine hypercube.vtu --region "$R/moving-sphere.json" -n 12 -o r.pvtu -q -f \

@@ -6,9 +6,11 @@
 
 #include "bisect/distributed.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <iomanip>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 
 namespace bisect::cli {
@@ -16,6 +18,9 @@ namespace bisect::cli {
 namespace {
 
 bool g_we_initialised = false;
+
+// The cells an indicator marked, while they travel to their parts.
+constexpr const char *kMarkedArray = "bisect:indicator_marked";
 
 } // namespace
 
@@ -76,19 +81,37 @@ int run_refine_mpi(const DistributedArgs &a) {
     try {
       if (!pvtu) {
         check_extension(a.output);
-        std::vector<std::string> inputs{a.input, a.region};
+        std::vector<std::string> inputs{a.input};
+        if (!a.region.empty())
+          inputs.push_back(a.region);
         outputs = std::make_unique<OutputSet>(inputs, a.force);
         h_mesh = outputs->add(a.output);
       } else {
-        outputs = std::make_unique<OutputSet>(std::vector<std::string>{a.input, a.region}, a.force);
+        outputs = std::make_unique<OutputSet>(a.region.empty()
+                                                  ? std::vector<std::string>{a.input}
+                                                  : std::vector<std::string>{a.input, a.region},
+                                              a.force);
       }
       if (a.csv != "none")
         h_csv = outputs->add(a.csv);
       mesh = load_for_refinement(a.input, a.marking, quiet);
       if (!pvtu)
         check_output_format(a.output, mesh.dim);
-      (void)read_region(a.region, mesh.dim);
+      if (!a.region.empty())
+        (void)read_region(a.region, mesh.dim);
       original = measure_invariants(mesh, false);
+      if (!a.indicator.empty()) {
+        // The indicator marks the input's cells (one iteration): the marks
+        // travel with the cells as a cell array, removed after selecting.
+        const std::vector<double> values = cell_indicator(mesh, a.indicator, a.input);
+        const std::vector<CellId> marked =
+            mark_by_indicator(values, IndicatorRule(a.rule), a.parameter, a.input, &mesh);
+        DataArray flag{kMarkedArray, 1, std::vector<double>(mesh.num_cells(), 0.0),
+                       ValueType::Int8};
+        for (CellId c : marked)
+          flag.values[c] = 1;
+        mesh.cell_data.push_back(std::move(flag));
+      }
     } catch (const Error &e) {
       failure = e.kind == ErrorKind::Check ? kExitCheck : kExitInput;
       message = e.what();
@@ -116,7 +139,7 @@ int run_refine_mpi(const DistributedArgs &a) {
     mesh = Mesh{};
     Invariants part_original = measure_invariants(d.local, false);
     double border_original = border_measure(d);
-    std::unique_ptr<Region> region = read_region(a.region, dim);
+    std::unique_ptr<Region> region = a.region.empty() ? nullptr : read_region(a.region, dim);
     if (!quiet)
       std::cerr << "bisect: " << a.input << ": " << dim << "D, " << with_commas(cells0)
                 << " cells, " << with_commas(verts0) << " vertices, marking "
@@ -143,8 +166,22 @@ int run_refine_mpi(const DistributedArgs &a) {
     double exchange_seconds = 0;
     for (int it = 1; it <= a.iterations; ++it) {
       const auto t0 = std::chrono::steady_clock::now();
-      const std::vector<CellId> selected = select_cells(d.local, *region);
-      const DistributedRefineResult r = refine(d, selected);
+      std::vector<CellId> selected;
+      if (region)
+        selected = select_cells(d.local, *region);
+      for (auto f = d.local.cell_data.begin(); f != d.local.cell_data.end(); ++f)
+        if (f->name == kMarkedArray) {
+          std::vector<CellId> by_indicator, both;
+          for (std::size_t c = 0; c < d.local.num_cells(); ++c)
+            if (f->values[c] != 0)
+              by_indicator.push_back(CellId(c));
+          std::set_union(selected.begin(), selected.end(), by_indicator.begin(), by_indicator.end(),
+                         std::back_inserter(both));
+          selected = std::move(both);
+          d.local.cell_data.erase(f);
+          break;
+        }
+      const DistributedRefineResult r = refine_marked(d, selected, a.depth);
       if (r.precision_reached)
         throw UsageError("distributed refinement reached the precision limit (an edge below "
                          "2^-40 of its coordinates' magnitude) in iteration " +
@@ -153,7 +190,9 @@ int run_refine_mpi(const DistributedArgs &a) {
                          "written; refine without mpirun to stop there");
       if (r.selected == 0) {
         if (!quiet)
-          std::cerr << "bisect: the region touches no cell; nothing more to refine\n";
+          std::cerr << (a.indicator.empty()
+                            ? "bisect: the region touches no cell; nothing more to refine\n"
+                            : "bisect: nothing is marked; the mesh is written unchanged\n");
         break;
       }
       q = quality_summary(d);

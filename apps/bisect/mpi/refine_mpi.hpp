@@ -11,7 +11,11 @@ namespace bisect::cli {
 
 struct DistributedArgs {
   std::string input, region, output, csv; // csv "none": no CSV
-  int iterations = 1;
+  int iterations = 1, depth = 1;
+  // --indicator NAME with one rule (IndicatorRule) and its parameter.
+  std::string indicator;
+  int rule = 0; // IndicatorRule
+  double parameter = 0;
   std::optional<Marking> marking;
   Compression compression = Compression::Zlib;
   bool force = false, quiet = false, json = false;
