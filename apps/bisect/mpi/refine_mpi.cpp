@@ -5,6 +5,7 @@
 #include "cli.hpp"
 
 #include "bisect/distributed.hpp"
+#include "bisect/threads.hpp"
 
 #include <algorithm>
 #include <cstdlib>
@@ -36,6 +37,12 @@ void mpi_start(int *argc, char ***argv) {
     return;
   MPI_Init(argc, argv);
   g_we_initialised = true;
+  // The ranks on this machine share its cores: each gets its share of
+  // threads unless --threads says otherwise (parsed after this).
+  if (const char *local = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE")) {
+    const int ranks = std::max(1, std::atoi(local));
+    set_threads(std::max(1, threads() / ranks));
+  }
 }
 
 void mpi_stop() {
@@ -271,6 +278,8 @@ int run_refine_mpi(const DistributedArgs &a) {
     std::uint64_t sent = edges_sent, sent_max = 0, part = d.local.num_cells(), part_max = 0;
     MPI_Reduce(&sent, &sent_max, 1, MPI_UINT64_T, MPI_MAX, 0, MPI_COMM_WORLD);
     MPI_Reduce(&part, &part_max, 1, MPI_UINT64_T, MPI_MAX, 0, MPI_COMM_WORLD);
+    double rss = peak_rss_bytes(), rss_max = 0;
+    MPI_Reduce(&rss, &rss_max, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
     const double total = seconds_since(t_start);
     if (rank == 0 && a.json) {
       nlohmann::json j;
@@ -300,6 +309,7 @@ int run_refine_mpi(const DistributedArgs &a) {
       j["seconds"] = total;
       j["final_check_seconds"] = check_seconds;
       j["write_seconds"] = write_seconds;
+      j["peak_rss_bytes_max_rank"] = rss_max;
       print_json(j);
     }
     if (!quiet)
