@@ -10,7 +10,8 @@
 namespace bisect {
 
 // Reads the cells of the highest dimension present (triangles -> 2D when all z
-// are 0, tetrahedra -> 3D, pentatopes in the 4D .vtu convention -> 4D).
+// are 0, tetrahedra -> 3D, pentatopes in the 4D .vtu convention -> 4D). A
+// .pvtu is read as one mesh (read_pvtu).
 // Cells are returned in file order (.msh: in element tag order), unmarked
 // (mesh.stage empty). Cell data and
 // point data become DataArrays; Gmsh tags become cell arrays
@@ -68,6 +69,15 @@ void save_mesh(const std::string &path, Mesh &mesh, const WriteOptions &options 
 Mesh read_msh(const std::string &path);
 void write_msh(const std::string &path, const Mesh &mesh);
 Mesh read_vtu(const std::string &path);
+// A .pvtu (what a distributed refine writes, or ParaView): its pieces read
+// as .vtu files and merged into one mesh (read_mesh takes .pvtu too). Points
+// in several pieces become one vertex: by the point array bisect:global_id
+// (state.hpp) where the pieces carry it, else by their coordinates; vertices
+// with ids come first, by id, then the others by coordinates. A tagged
+// lower-dimensional cell in several pieces is kept once. The pieces' tree
+// arrays (bisect:parent_a and the like, which name a piece's own points) are
+// dropped: a mesh read from a .pvtu has no tree.
+Mesh read_pvtu(const std::string &path);
 void write_vtu(const std::string &path, const Mesh &mesh,
                Compression compression = Compression::Zlib);
 

@@ -40,6 +40,13 @@ inline constexpr const char *kMarkingArray =
 // (n-1,n); -1 for an edge without rank.
 inline constexpr const char *kEdgeRankArray = "bisect:edge_rank";
 
+// In the pieces of a distributed refine's .pvtu (distributed.hpp), per point:
+// its id in the mesh the run started from (its input, or the last rebalance's
+// whole mesh), -1 for a vertex made since. Ids >= 0 give the input vertices'
+// order, which the global edge order of the marking depends on; read_pvtu
+// merges pieces by them and drops the array.
+inline constexpr const char *kGlobalIdArray = "bisect:global_id";
+
 // The bisection tree (mesh.hpp, ALGORITHMS.md §10), one-component integer
 // arrays so that converters that only take scalar fields (meshio's XDMF and
 // Gmsh 2.2 writers) keep them:

@@ -182,6 +182,14 @@ Mesh read_mesh(const std::string &path) {
   if (path == "-")
     return read_stdin();
   check_readable_file(path);
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".pvtu") {
+    Mesh mesh = read_pvtu(path);
+    settle_plane(mesh, path, Format::Vtu);
+    return mesh;
+  }
   const Format format = format_of(path);
   Mesh mesh = format == Format::Vtu ? read_vtu(path) : read_msh(path);
   settle_plane(mesh, path, format);

@@ -2,6 +2,12 @@
 // bisected border edges, the final check across parts, gathering and .pvtu.
 #include "bisect/distributed.hpp"
 
+// GCC 12 warns falsely about std::string concatenation (-Wrestrict, its bug
+// 105329) and about std::sort's insertion step on a vector of structs
+// (-Warray-bounds) in this file; neither is reachable.
+#pragma GCC diagnostic ignored "-Wrestrict"
+#pragma GCC diagnostic ignored "-Warray-bounds"
+
 #include "bisect/error.hpp"
 #include "bisect/output.hpp"
 #include "bisect/refine.hpp"
@@ -613,6 +619,7 @@ DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &se
   std::vector<std::size_t> slot_of(std::size_t(d.size), std::size_t(-1));
   for (std::size_t i = 0; i < d.neighbours.size(); ++i)
     slot_of[std::size_t(d.neighbours[i])] = i;
+  std::vector<double> pending; // received edges with an end not here (yet)
   for (;;) {
     // The vertices made since the last exchange: who may hold them, and the
     // edges they split, for those ranks.
@@ -633,19 +640,32 @@ DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &se
     made_from = m.num_vertices();
     const auto t0 = clock::now();
     const std::vector<std::vector<double>> in = trade(d, out);
-    // The edges this part holds and has not bisected yet.
+    // The edges this part holds and has not bisected yet. An edge whose end
+    // is not here yet may be one a neighbour bisected after making that end
+    // in the same round (this part makes the end from another edge of the
+    // same message): it waits, and is looked at again after every round.
     std::vector<std::array<VertexId, 2>> split;
-    for (const std::vector<double> &edges : in)
-      for (std::size_t at = 0; at + 2 * std::size_t(dim) <= edges.size(); at += 2 * dim) {
-        const VertexId a = index.find(edges.data() + at), b = index.find(edges.data() + at + dim);
-        if (a == kNoVertex || b == kNoVertex)
-          continue;
-        double mid[4];
-        for (int k = 0; k < dim; ++k)
-          mid[k] = 0.5 * (m.point(a)[k] + m.point(b)[k]);
-        if (index.find(mid) == kNoVertex)
-          split.push_back({a, b});
+    std::vector<double> waiting;
+    auto consider = [&](const double *edge) {
+      const VertexId a = index.find(edge), b = index.find(edge + dim);
+      if (a == kNoVertex || b == kNoVertex) {
+        waiting.insert(waiting.end(), edge, edge + 2 * dim);
+        return;
       }
+      double mid[4];
+      for (int k = 0; k < dim; ++k)
+        mid[k] = 0.5 * (m.point(a)[k] + m.point(b)[k]);
+      if (index.find(mid) == kNoVertex)
+        split.push_back({a, b});
+    };
+    for (std::size_t at = 0; at + 2 * std::size_t(dim) <= pending.size(); at += 2 * dim)
+      consider(pending.data() + at);
+    for (const std::vector<double> &edges : in)
+      for (std::size_t at = 0; at + 2 * std::size_t(dim) <= edges.size(); at += 2 * dim)
+        consider(edges.data() + at);
+    pending = std::move(waiting);
+    std::sort(split.begin(), split.end());
+    split.erase(std::unique(split.begin(), split.end()), split.end());
     const bool more = any_rank(!split.empty() || precision, d.comm.get());
     result.exchange_seconds += std::chrono::duration<double>(clock::now() - t0).count();
     if (!more || any_rank(precision, d.comm.get()))
@@ -1268,9 +1288,22 @@ void write_pvtu(const std::string &path, DistributedMesh &d, bool force,
                                  level = std::move(d.local.level);
       std::vector<VertexId> parents = std::move(d.local.parent_edge);
       d.local.clear_tree();
+      // Each point's id in the mesh the run started from (-1: made since),
+      // for read_pvtu (state.hpp).
+      DataArray ids{kGlobalIdArray, 1, std::vector<double>(d.local.num_vertices(), -1.0),
+                    ValueType::Int64};
+      for (std::size_t v = 0; v < d.input_vertex.size(); ++v)
+        ids.values[v] = double(d.input_vertex[v]);
+      d.local.point_data.push_back(std::move(ids));
+      auto drop_ids = [&] {
+        std::erase_if(d.local.point_data,
+                      [](const DataArray &a) { return a.name == kGlobalIdArray; });
+      };
       try {
         write_mesh_file_with_state(outputs.file(h_piece), piece, d.local, o);
+        drop_ids();
       } catch (...) {
+        drop_ids();
         d.local.generation = std::move(generation);
         d.local.level = std::move(level);
         d.local.parent_edge = std::move(parents);

@@ -1,0 +1,232 @@
+// Reading a .pvtu (VTK's parallel unstructured grid: a small XML file naming
+// one .vtu piece per part) as one mesh: what `mpirun … bisect refine -o
+// X.pvtu` writes, or ParaView. The pieces are read as .vtu files and merged:
+// points shared by pieces become one vertex (by the bisect:global_id point
+// array where the pieces carry it, else by their coordinates, which are the
+// same bits in every piece that holds the point).
+#include "bisect/io.hpp"
+#include "bisect/state.hpp"
+#include "core/faces.hpp"
+
+#include <algorithm>
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <regex>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace bisect {
+
+namespace {
+
+std::vector<std::string> piece_sources(const std::string &path) {
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  if (ec)
+    throw InputError(path, "cannot open: " + ec.message());
+  if (size > (std::uintmax_t(64) << 20))
+    throw InputError(path, "larger than 64 MB: not a .pvtu index of pieces");
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string xml = text.str();
+  if (xml.find("PUnstructuredGrid") == std::string::npos)
+    throw InputError(path, "not a parallel unstructured grid (no <PUnstructuredGrid>)");
+  static const std::regex piece(R"re(<Piece\s+Source\s*=\s*"([^"]*)")re");
+  std::vector<std::string> sources;
+  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), piece); it != std::sregex_iterator();
+       ++it) {
+    const fs::path source((*it)[1].str());
+    if (source.empty())
+      throw InputError(path, "a <Piece> with an empty Source");
+    sources.push_back(source.is_absolute()
+                          ? source.string()
+                          : (fs::path(path).parent_path() / source).lexically_normal().string());
+  }
+  if (sources.empty())
+    throw InputError(path, "no <Piece Source=...> in the file");
+  return sources;
+}
+
+// The arrays of `a` and `b` by name, components and type, for a message.
+bool same_arrays(const std::vector<DataArray> &a, const std::vector<DataArray> &b) {
+  if (a.size() != b.size())
+    return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (a[i].name != b[i].name || a[i].components != b[i].components || a[i].type != b[i].type)
+      return false;
+  return true;
+}
+
+} // namespace
+
+Mesh read_pvtu(const std::string &path) {
+  const std::vector<std::string> sources = piece_sources(path);
+  std::vector<Mesh> pieces;
+  for (const std::string &source : sources) {
+    try {
+      pieces.push_back(read_vtu(source));
+    } catch (const InputError &e) {
+      throw InputError(path, std::string("piece ") + e.what());
+    }
+  }
+  // A piece's tree arrays (state.hpp) name its own points: they mean
+  // nothing once the pieces are merged, so a .pvtu has no tree.
+  for (Mesh &m : pieces) {
+    auto tree = [](const DataArray &a) {
+      return a.name == kGenerationArray || a.name == kParentAArray || a.name == kParentBArray ||
+             a.name == kLevelArray;
+    };
+    std::erase_if(m.point_data, tree);
+    std::erase_if(m.cell_data, tree);
+  }
+  const Mesh &first = pieces[0];
+  const int dim = first.dim, n = first.cell_size();
+  for (std::size_t p = 1; p < pieces.size(); ++p) {
+    const Mesh &m = pieces[p];
+    if (m.dim != dim)
+      throw InputError(path, "piece " + sources[p] + " is " + std::to_string(m.dim) +
+                                 "D, the first piece " + std::to_string(dim) + "D");
+    if (!same_arrays(m.point_data, first.point_data) || !same_arrays(m.cell_data, first.cell_data))
+      throw InputError(path, "piece " + sources[p] +
+                                 " has other point or cell arrays than the first piece");
+    if (m.entities.size() != first.entities.size())
+      throw InputError(path, "piece " + sources[p] +
+                                 " has other lower-dimensional cells than the first piece");
+  }
+  // Global ids: where every piece has the array, ids >= 0 name the same
+  // vertex across pieces (and give their order); -1 is a vertex made by
+  // refinement, found by its coordinates.
+  auto gid_slot = [](const Mesh &m) -> int {
+    for (std::size_t a = 0; a < m.point_data.size(); ++a)
+      if (m.point_data[a].name == kGlobalIdArray && m.point_data[a].components == 1)
+        return int(a);
+    return -1;
+  };
+  const int gid = gid_slot(first);
+  // Every piece vertex -> (key): gid vertices by id, the others by point.
+  std::map<double, VertexId> by_id;
+  std::map<std::vector<double>, VertexId> by_point;
+  struct Ref {
+    std::size_t piece;
+    VertexId v;
+  };
+  std::vector<Ref> id_refs, point_refs;
+  std::vector<std::vector<VertexId>> merged(pieces.size());
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    const Mesh &m = pieces[p];
+    merged[p].assign(m.num_vertices(), kNoVertex);
+    for (std::size_t v = 0; v < m.num_vertices(); ++v) {
+      const double id = gid >= 0 ? m.point_data[std::size_t(gid)].values[v] : -1.0;
+      if (id >= 0) {
+        if (by_id.emplace(id, 0).second)
+          id_refs.push_back({p, VertexId(v)});
+      } else {
+        std::vector<double> key(m.point(VertexId(v)), m.point(VertexId(v)) + dim);
+        if (by_point.emplace(std::move(key), 0).second)
+          point_refs.push_back({p, VertexId(v)});
+      }
+    }
+  }
+  // Vertices with ids first, by id; then the others by coordinates (a
+  // .pvtu from another tool: all of them), an order every rank count gives.
+  Mesh out;
+  out.dim = dim;
+  out.physical_names = first.physical_names;
+  for (const DataArray &a : first.point_data)
+    if (a.name != kGlobalIdArray)
+      out.point_data.push_back({a.name, a.components, {}, a.type});
+  for (const DataArray &a : first.cell_data)
+    out.cell_data.push_back({a.name, a.components, {}, a.type});
+  std::vector<Ref> order;
+  {
+    VertexId next = 0;
+    for (auto &[id, v] : by_id)
+      v = next++;
+    std::sort(id_refs.begin(), id_refs.end(), [&](const Ref &a, const Ref &b) {
+      return pieces[a.piece].point_data[std::size_t(gid)].values[a.v] <
+             pieces[b.piece].point_data[std::size_t(gid)].values[b.v];
+    });
+    for (auto &[key, v] : by_point)
+      v = next++;
+    std::sort(point_refs.begin(), point_refs.end(), [&](const Ref &a, const Ref &b) {
+      const double *x = pieces[a.piece].point(a.v), *y = pieces[b.piece].point(b.v);
+      return std::lexicographical_compare(x, x + dim, y, y + dim);
+    });
+    order = id_refs;
+    order.insert(order.end(), point_refs.begin(), point_refs.end());
+  }
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    const Mesh &m = pieces[p];
+    for (std::size_t v = 0; v < m.num_vertices(); ++v) {
+      const double id = gid >= 0 ? m.point_data[std::size_t(gid)].values[v] : -1.0;
+      merged[p][v] =
+          id >= 0
+              ? by_id.at(id)
+              : by_point.at(std::vector<double>(m.point(VertexId(v)), m.point(VertexId(v)) + dim));
+    }
+  }
+  for (const Ref &r : order) {
+    const Mesh &m = pieces[r.piece];
+    out.coords.insert(out.coords.end(), m.point(r.v), m.point(r.v) + dim);
+    std::size_t k = 0;
+    for (const DataArray &a : m.point_data) {
+      if (a.name == kGlobalIdArray)
+        continue;
+      const std::size_t c = std::size_t(a.components);
+      std::vector<double> &to = out.point_data[k++].values;
+      to.insert(to.end(), a.values.begin() + std::ptrdiff_t(r.v * c),
+                a.values.begin() + std::ptrdiff_t((r.v + 1) * c));
+    }
+  }
+  // Cells piece after piece, with their arrays.
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    const Mesh &m = pieces[p];
+    for (std::size_t c = 0; c < m.num_cells(); ++c)
+      for (int i = 0; i < n; ++i)
+        out.cells.push_back(merged[p][m.cell(CellId(c))[i]]);
+    for (std::size_t a = 0; a < m.cell_data.size(); ++a)
+      out.cell_data[a].values.insert(out.cell_data[a].values.end(), m.cell_data[a].values.begin(),
+                                     m.cell_data[a].values.end());
+  }
+  // Lower-dimensional cells: one on the border of two pieces is in both;
+  // it is kept from the first piece that has it (as often as it has it).
+  for (std::size_t b = 0; b < first.entities.size(); ++b) {
+    Entities block;
+    block.dim = first.entities[b].dim;
+    for (const DataArray &a : first.entities[b].data)
+      block.data.push_back({a.name, a.components, {}, a.type});
+    std::map<std::array<VertexId, 4>, std::size_t> owner; // key -> first piece holding it
+    for (std::size_t p = 0; p < pieces.size(); ++p) {
+      const Entities &e = pieces[p].entities[b];
+      if (e.dim != block.dim ||
+          !same_arrays(e.data, block.data.empty() ? e.data : first.entities[b].data))
+        throw InputError(path, "piece " + sources[p] +
+                                   " has other lower-dimensional cells than the first piece");
+      for (std::size_t i = 0; i < e.size(); ++i) {
+        VertexId ids[4];
+        for (int k = 0; k <= e.dim; ++k)
+          ids[k] = merged[p][e.entity(i)[k]];
+        const FaceKey key = face_key(ids, e.dim + 1);
+        const std::size_t holder = owner.emplace(key.ids, p).first->second;
+        if (holder != p)
+          continue;
+        block.vertices.insert(block.vertices.end(), ids, ids + e.dim + 1);
+        for (std::size_t a = 0; a < e.data.size(); ++a) {
+          const std::size_t c = std::size_t(e.data[a].components);
+          block.data[a].values.insert(block.data[a].values.end(),
+                                      e.data[a].values.begin() + std::ptrdiff_t(i * c),
+                                      e.data[a].values.begin() + std::ptrdiff_t((i + 1) * c));
+        }
+      }
+    }
+    out.entities.push_back(std::move(block));
+  }
+  return out;
+}
+
+} // namespace bisect
