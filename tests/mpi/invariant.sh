@@ -1,9 +1,9 @@
 # The invariant of distributed refinement (README, "MPI"): under mpirun with
-# P = 1, 2, 3, 4 ranks (oversubscribed on 2 cores), in 2D, 3D and 4D, with
-# every marking, from meshes with and without bisection state and tags, the
+# P = 1, 2, 3, 4 ranks (oversubscribed on 2 cores; the markings other than
+# index with P = 2, 3), in 2D, 3D and 4D, with every marking, from meshes with and without bisection state and tags, the
 # result's cells, as sets of vertex coordinates, are the serial run's. Read
 # back with VTK's parallel reader (the .pvtu, as ParaView opens it) and its
-# serial one (the gathered .vtu). The gathered file is the same bytes for
+# serial one (the gathered .vtu, P = 2, 3). The gathered file is the same bytes for
 # every P > 1, and its tagged entities are the serial run's.
 # $1: the bisect of a -DBISECT_MPI=ON build; $2: the source tree.
 source "$(dirname "$0")/../cli/lib.bash"
@@ -41,11 +41,15 @@ for c in "${cases[@]}"; do
   expect_exit 0 "$BISECT" refine "$mesh" --region "$region" -n "$iters" -m "$marking" \
     -o serial.vtu --quality-csv none -q -f
   serial_info=$("$BISECT" info serial.vtu | grep -E '^(cells|vertices|tagged)')
-  for p in 1 2 3 4; do
+  # Every P for the index marking, two for the others (the suite's time).
+  ranks="2 3"
+  [[ $marking == index ]] && ranks="1 2 3 4"
+  for p in $ranks; do
     expect_exit 0 run_mpi "$p" refine "$mesh" --region "$region" -n "$iters" -m "$marking" \
       -o parts.pvtu --quality-csv none -q -f
     [[ $(ls parts_*.vtu | wc -l) == "$p" ]] || fail "$c, P=$p: not $p pieces"
     /usr/bin/python3 "$same" serial.vtu parts.pvtu >same.txt || { cat same.txt >&2; fail "$c, P=$p: the .pvtu's cells differ from the serial run's"; }
+    ((p == 2 || p == 3)) || { n=$((n + 1)); rm -f parts_*.vtu; continue; }
     expect_exit 0 run_mpi "$p" refine "$mesh" --region "$region" -n "$iters" -m "$marking" \
       -o gathered-$p.vtu --quality-csv none -q -f
     /usr/bin/python3 "$same" serial.vtu gathered-$p.vtu >same.txt || { cat same.txt >&2; fail "$c, P=$p: the gathered cells differ from the serial run's"; }
