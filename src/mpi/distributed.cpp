@@ -385,29 +385,26 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
       cells_of[std::size_t(part[c])].push_back(c);
     // holders[v]: the parts whose cells hold v, increasing (CSR).
     const std::size_t nv = mesh.num_vertices();
-    std::vector<std::uint32_t> count(nv + 1, 0), last(nv, std::uint32_t(-1));
-    for (int p = 0; p < d.size; ++p)
-      for (std::uint64_t c : cells_of[std::size_t(p)])
-        for (int i = 0; i < n; ++i) {
-          const VertexId v = mesh.cell(CellId(c))[i];
-          if (last[v] != std::uint32_t(p)) {
-            last[v] = std::uint32_t(p);
-            ++count[v + 1];
+    // visit(v, p) once for every part p holding v, parts in increasing order.
+    std::vector<std::uint32_t> last(nv);
+    auto for_each_holder = [&](auto &&visit) {
+      std::fill(last.begin(), last.end(), std::uint32_t(-1));
+      for (int p = 0; p < d.size; ++p)
+        for (std::uint64_t c : cells_of[std::size_t(p)])
+          for (int i = 0; i < n; ++i) {
+            const VertexId v = mesh.cell(CellId(c))[i];
+            if (last[v] != std::uint32_t(p)) {
+              last[v] = std::uint32_t(p);
+              visit(v, p);
+            }
           }
-        }
+    };
+    std::vector<std::uint32_t> count(nv + 1, 0);
+    for_each_holder([&](VertexId v, int) { ++count[v + 1]; });
     std::partial_sum(count.begin(), count.end(), count.begin());
     std::vector<std::int32_t> holders(count[nv]);
     std::vector<std::uint32_t> fill(count.begin(), count.end() - 1);
-    std::fill(last.begin(), last.end(), std::uint32_t(-1));
-    for (int p = 0; p < d.size; ++p)
-      for (std::uint64_t c : cells_of[std::size_t(p)])
-        for (int i = 0; i < n; ++i) {
-          const VertexId v = mesh.cell(CellId(c))[i];
-          if (last[v] != std::uint32_t(p)) {
-            last[v] = std::uint32_t(p);
-            holders[fill[v]++] = p;
-          }
-        }
+    for_each_holder([&](VertexId v, int p) { holders[fill[v]++] = p; });
     std::vector<VertexId> local_id(nv, kNoVertex);
     // Tagged entities: each goes to every part with a cell it is a face of.
     std::vector<std::unordered_multimap<FaceKey, std::uint64_t, FaceKeyHash>> entity_index(
