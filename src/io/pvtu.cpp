@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -68,8 +69,15 @@ Mesh read_pvtu(const std::string &path) {
   const std::vector<std::string> sources = piece_sources(path);
   std::vector<Mesh> pieces;
   for (const std::string &source : sources) {
+    // Pieces are .vtu files, checked as inputs are (a regular, readable,
+    // non-empty file: never a device, a FIFO or another .pvtu).
+    std::string ext = fs::path(source).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext != ".vtu")
+      throw InputError(path, "piece " + source + " is not a .vtu file");
     try {
-      pieces.push_back(read_vtu(source));
+      pieces.push_back(read_mesh(source));
     } catch (const InputError &e) {
       throw InputError(path, std::string("piece ") + e.what());
     }

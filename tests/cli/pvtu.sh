@@ -51,4 +51,13 @@ one_line_naming missing_0.vtu
 printf '<VTKFile type="PUnstructuredGrid"><PUnstructuredGrid><Piece Source="p2_0.vtu"/><Piece Source="p3_0.vtu"/></PUnstructuredGrid></VTKFile>' >mixed.pvtu
 expect_exit 1 "$BISECT" info mixed.pvtu
 one_line_naming mixed.pvtu
+for src in /dev/zero p2.pvtu "$WORK"; do
+  echo "<VTKFile type=\"PUnstructuredGrid\"><PUnstructuredGrid><Piece Source=\"$src\"/></PUnstructuredGrid></VTKFile>" >odd.pvtu
+  expect_exit 1 timeout 10 "$BISECT" info odd.pvtu
+  one_line_naming odd.pvtu
+done
+mkfifo fifo.vtu
+echo '<VTKFile type="PUnstructuredGrid"><PUnstructuredGrid><Piece Source="fifo.vtu"/></PUnstructuredGrid></VTKFile>' >fifo.pvtu
+expect_exit 1 timeout 10 "$BISECT" info fifo.pvtu
+one_line_naming fifo.vtu
 echo "pvtu: VTK's parallel writer's .pvtu read as the mesh in 2D, 3D, 4D; bad ones refused"
