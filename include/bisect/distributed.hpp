@@ -16,6 +16,7 @@
 #include "bisect/io.hpp"
 #include "bisect/measure.hpp"
 #include "bisect/mesh.hpp"
+#include "bisect/refine.hpp"
 
 #include <mpi.h>
 
@@ -82,13 +83,19 @@ struct DistributedRefineResult {
 };
 
 // Bisects the cells `selected` (ids of d.local) and refines to conformity
-// across all ranks. Collective.
-DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &selected);
+// across all ranks. Collective. `limits` go to each part's refine(): with
+// `cancel` set (to a flag that stays false) every part keeps its undo log,
+// so that the precision limit undoes that part's last step and sets
+// precision_reached instead of throwing; the parts are then not usable
+// (keep a copy to go back to). A part whose refine() throws makes every
+// rank throw CheckError naming it.
+DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &selected,
+                               const RefineLimits &limits = {});
 
 // refine_marked (driver.hpp) across ranks: each marked cell `depth`
 // generations down, then to conformity. Collective.
 DistributedRefineResult refine_marked(DistributedMesh &d, const std::vector<CellId> &marked,
-                                      int depth);
+                                      int depth, const RefineLimits &limits = {});
 
 // Global figures (collective): quality over all cells; cells and vertices
 // (shared vertices counted once).

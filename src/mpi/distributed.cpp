@@ -590,7 +590,8 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
 
 // ---------------------------------------------------------------- refine
 
-DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &selected) {
+DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &selected,
+                               const RefineLimits &limits) {
   using clock = std::chrono::steady_clock;
   DistributedRefineResult result;
   Mesh &m = d.local;
@@ -611,9 +612,20 @@ DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &se
   level = std::min(level + 1, int(std::numeric_limits<std::uint16_t>::max()));
   const std::size_t first_new = m.num_vertices();
   std::size_t made_from = m.num_vertices();
-  RefineResult r = refine(m, selected);
-  bisections += r.bisections;
-  precision |= r.limit_reached;
+  // A local refine that throws (an internal check) must not leave the other
+  // ranks waiting: its message goes to every rank at the next agreement.
+  std::string failure;
+  auto local_refine = [&](const std::vector<CellId> &cells,
+                          const std::vector<std::array<VertexId, 2>> &split) {
+    try {
+      const RefineResult r = refine(m, cells, split, limits);
+      bisections += r.bisections;
+      precision |= r.limit_reached;
+    } catch (const std::exception &e) {
+      failure = e.what();
+    }
+  };
+  local_refine(selected, {});
   std::vector<std::size_t> slot_of(std::size_t(d.size), std::size_t(-1));
   for (std::size_t i = 0; i < d.neighbours.size(); ++i)
     slot_of[std::size_t(d.neighbours[i])] = i;
@@ -623,7 +635,7 @@ DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &se
     // edges they split, for those ranks.
     std::vector<std::vector<double>> out(d.neighbours.size());
     d.sharers.resize(m.num_vertices());
-    for (std::size_t v = made_from; v < m.num_vertices(); ++v) {
+    for (std::size_t v = made_from; failure.empty() && v < m.num_vertices(); ++v) {
       const VertexId a = m.parent_edge[2 * v], b = m.parent_edge[2 * v + 1];
       d.sharers[v] = intersect(d.sharers[a], d.sharers[b]);
       if (!d.sharers[v].empty())
@@ -664,14 +676,24 @@ DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &se
     pending = std::move(waiting);
     std::sort(split.begin(), split.end());
     split.erase(std::unique(split.begin(), split.end()), split.end());
-    const bool more = any_rank(!split.empty() || precision, d.comm.get());
+    const bool stop = precision || !failure.empty();
+    const bool more = any_rank(!split.empty() || stop, d.comm.get());
     result.exchange_seconds += std::chrono::duration<double>(clock::now() - t0).count();
-    if (!more || any_rank(precision, d.comm.get()))
+    if (!more || any_rank(stop, d.comm.get()))
       break;
     ++result.rounds;
-    r = refine(m, {}, split);
-    bisections += r.bisections;
-    precision |= r.limit_reached;
+    local_refine({}, split);
+  }
+  {
+    int failing = failure.empty() ? d.size : d.rank, first = d.size;
+    MPI_Allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, d.comm.get());
+    if (first < d.size) {
+      std::uint64_t len = failure.size();
+      MPI_Bcast(&len, 1, MPI_UINT64_T, first, d.comm.get());
+      failure.resize(len);
+      MPI_Bcast(failure.data(), int(len), MPI_CHAR, first, d.comm.get());
+      throw CheckError("part " + std::to_string(first) + ": " + failure);
+    }
   }
   result.precision_reached = any_rank(precision, d.comm.get());
   result.selected = sum_ranks(selected.size(), d.comm.get());
@@ -1144,9 +1166,9 @@ Mesh gather(const DistributedMesh &d, int root) {
 }
 
 DistributedRefineResult refine_marked(DistributedMesh &d, const std::vector<CellId> &marked,
-                                      int depth) {
+                                      int depth, const RefineLimits &limits) {
   if (depth <= 1)
-    return refine(d, marked);
+    return refine(d, marked, limits);
   // As refine_marked (driver.hpp): each marked cell's volume travels to its
   // descendants as a cell array; a descendant fewer than `depth`
   // generations down (by the volume ratio) is bisected again next round.
@@ -1163,7 +1185,7 @@ DistributedRefineResult refine_marked(DistributedMesh &d, const std::vector<Cell
   DistributedRefineResult total;
   std::vector<CellId> round = marked;
   for (int r = 0; r < depth && any_rank(!round.empty(), d.comm.get()); ++r) {
-    const DistributedRefineResult step = refine(d, round);
+    const DistributedRefineResult step = refine(d, round, limits);
     if (r == 0)
       total.selected = step.selected;
     total.bisections += step.bisections;

@@ -97,6 +97,19 @@ PY
     -o d.pvtu -q -f --quality-csv none
   /usr/bin/python3 "$same" s.vtu d.pvtu >same.txt || { cat same.txt >&2; fail "${dim}D indicator + region differs"; }
 done
+# The precision limit (refine.hpp): a tiny sphere refined for 200 iterations
+# stops with exit 3 before the iteration that would bisect an edge finer than
+# doubles resolve, on every rank at once, and writes the mesh before it: the
+# serial run's.
+for dim in 2 3; do
+  "$BISECT" generate kuhn --dim $dim --cells 2 -o kp.vtu -q -f
+  if [[ $dim == 2 ]]; then c="0.3, 0.4"; else c="0.3, 0.4, 0.35"; fi
+  echo "{\"type\": \"sphere\", \"center\": [$c], \"radius\": 1e-300}" >tiny.json
+  expect_exit 3 "$BISECT" refine kp.vtu --region tiny.json -n 200 -o ps.vtu -q -f --quality-csv none
+  expect_exit 3 run_mpi 3 refine kp.vtu --region tiny.json -n 200 -o pd.pvtu -f --quality-csv none
+  grep -q 'stopping before iteration' "$WORK/err" || { cat "$WORK/err" >&2; fail "${dim}D: no stop line"; }
+  /usr/bin/python3 "$same" ps.vtu pd.pvtu >same.txt || { cat same.txt >&2; fail "${dim}D: the mesh at the precision limit differs"; }
+done
 # Parts that grow unequal are made again (rebalance): the moving sphere
 # refines one end of the hypercube first.
 expect_exit 0 run_mpi 2 refine hypercube.vtu --region "$R/moving-sphere.json" -n 12 -o r.pvtu -q -f \

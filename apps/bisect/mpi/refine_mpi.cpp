@@ -5,9 +5,12 @@
 #include "cli.hpp"
 
 #include "bisect/distributed.hpp"
+#include "bisect/refine.hpp"
 #include "bisect/threads.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <iomanip>
 #include <iostream>
@@ -19,6 +22,26 @@ namespace bisect::cli {
 namespace {
 
 bool g_we_initialised = false;
+
+// Whether some edge of a selected cell is within 2^10 of the precision limit
+// (refine.hpp), as the serial refine's undo log decides.
+bool near_precision_limit(const Mesh &m, const std::vector<CellId> &selected) {
+  for (CellId c : selected) {
+    const VertexId *x = m.cell(c);
+    for (int i = 0; i <= m.dim; ++i)
+      for (int j = i + 1; j <= m.dim; ++j) {
+        const double *p = m.point(x[i]), *q = m.point(x[j]);
+        double extent = 0, magnitude = 0;
+        for (int k = 0; k < m.dim; ++k) {
+          extent = std::max(extent, std::abs(p[k] - q[k]));
+          magnitude = std::max({magnitude, std::abs(p[k]), std::abs(q[k])});
+        }
+        if (extent < 1024 * std::max(kRelativeResolution * magnitude, kAbsoluteResolution))
+          return true;
+      }
+  }
+  return false;
+}
 
 // The cells an indicator marked, while they travel to their parts.
 constexpr const char *kMarkedArray = "bisect:indicator_marked";
@@ -170,6 +193,7 @@ int run_refine_mpi(const DistributedArgs &a) {
     int rebalances = 0;
     std::size_t bisections = 0, selected_total = 0, edges_sent = 0;
     int rounds_total = 0, iterations = 0;
+    std::string stop_message; // the precision limit stopped the run
     double exchange_seconds = 0;
     for (int it = 1; it <= a.iterations; ++it) {
       const auto t0 = std::chrono::steady_clock::now();
@@ -188,13 +212,40 @@ int run_refine_mpi(const DistributedArgs &a) {
           d.local.cell_data.erase(f);
           break;
         }
-      const DistributedRefineResult r = refine_marked(d, selected, a.depth);
-      if (r.precision_reached)
-        throw UsageError("distributed refinement reached the precision limit (an edge below "
-                         "2^-40 of its coordinates' magnitude) in iteration " +
-                         std::to_string(it) +
-                         "; the distributed run cannot undo an iteration yet: no output "
-                         "written; refine without mpirun to stop there");
+      // Near the precision limit (a selected cell's edge within 2^10 of it:
+      // closure bisects cells about as coarse), every rank keeps its part as
+      // it is, so that passing the limit anywhere undoes the iteration.
+      const bool near = near_precision_limit(d.local, selected);
+      int any_near = near, keep = 0;
+      MPI_Allreduce(&any_near, &keep, 1, MPI_INT, MPI_LOR, MPI_COMM_WORLD);
+      std::unique_ptr<Mesh> kept_part;
+      std::vector<std::vector<int>> kept_sharers;
+      if (keep) {
+        kept_part = std::make_unique<Mesh>(d.local);
+        kept_sharers = d.sharers;
+      }
+      static const std::atomic<bool> never{false}; // keeps each part's undo log
+      RefineLimits limits;
+      if (keep)
+        limits.cancel = &never;
+      const DistributedRefineResult r = refine_marked(d, selected, a.depth, limits);
+      if (r.precision_reached) {
+        if (!kept_part)
+          throw UsageError("distributed refinement passed the precision limit (an edge below "
+                           "2^-40 of its coordinates' magnitude) in iteration " +
+                           std::to_string(it) +
+                           " far from where it was expected; no output written; refine "
+                           "without mpirun to stop there");
+        d.local = std::move(*kept_part);
+        d.sharers = std::move(kept_sharers);
+        count_global(d);
+        stop_message = "stopping before iteration " + std::to_string(it) +
+                       ": it would bisect an edge finer than doubles resolve (extent below "
+                       "2^-40 of its coordinates' magnitude, or below 2^-100); writing the "
+                       "mesh after iteration " +
+                       std::to_string(it - 1);
+        break;
+      }
       if (r.selected == 0) {
         if (!quiet)
           std::cerr << (a.indicator.empty()
@@ -240,6 +291,8 @@ int run_refine_mpi(const DistributedArgs &a) {
         std::cerr << buf;
       }
     }
+    if (!stop_message.empty() && !quiet)
+      std::cerr << "bisect: " << stop_message << "\n";
     const auto t_check = std::chrono::steady_clock::now();
     const CheckResult check = check_refined(d, part_original, border_original);
     const double check_seconds = seconds_since(t_check);
@@ -310,6 +363,7 @@ int run_refine_mpi(const DistributedArgs &a) {
       j["final_check_seconds"] = check_seconds;
       j["write_seconds"] = write_seconds;
       j["peak_rss_bytes_max_rank"] = rss_max;
+      j["limit_reached"] = !stop_message.empty();
       print_json(j);
     }
     if (!quiet)
@@ -317,7 +371,7 @@ int run_refine_mpi(const DistributedArgs &a) {
                 << (pvtu ? ", " + std::to_string(d.size) + " pieces" : std::string()) << ")"
                 << (h_csv >= 0 ? " and " + a.csv : std::string()) << " in " << std::fixed
                 << std::setprecision(2) << total << " s\n";
-    return kExitOk;
+    return stop_message.empty() ? kExitOk : kExitLimit;
   } catch (const Error &e) {
     // The distributed steps throw on every rank alike (a refusal, a failed
     // write): rank 0 speaks for all.
