@@ -55,7 +55,6 @@ struct DistributedMesh {
   // here (the root keeps the input's tree for gather()).
   Mesh local;
   std::vector<std::uint64_t> input_vertex; // per input vertex of `local`: its id in the input
-  std::vector<std::uint64_t> input_cell;   // per cell of the part as given: its input id
   // Per vertex of `local`: the other ranks that may hold it (sorted). A
   // superset: a vertex made on an edge gets the ranks both ends have.
   std::vector<std::vector<int>> sharers;

@@ -211,8 +211,7 @@ Mesh read_pvtu(const std::string &path) {
     std::map<std::array<VertexId, 4>, std::size_t> owner; // key -> first piece holding it
     for (std::size_t p = 0; p < pieces.size(); ++p) {
       const Entities &e = pieces[p].entities[b];
-      if (e.dim != block.dim ||
-          !same_arrays(e.data, block.data.empty() ? e.data : first.entities[b].data))
+      if (e.dim != block.dim || !same_arrays(e.data, first.entities[b].data))
         throw InputError(path, "piece " + sources[p] +
                                    " has other lower-dimensional cells than the first piece");
       for (std::size_t i = 0; i < e.size(); ++i) {

@@ -337,6 +337,35 @@ double facet_measure(const Mesh &m, const VertexId *f) {
   return std::sqrt(std::max(0.0, determinant(gram, k))) / factorial;
 }
 
+// Root's string, on every rank.
+std::string broadcast(std::string text, int root, MPI_Comm comm) {
+  std::uint64_t len = text.size();
+  MPI_Bcast(&len, 1, MPI_UINT64_T, root, comm);
+  text.resize(len);
+  MPI_Bcast(text.data(), int(len), MPI_CHAR, root, comm);
+  return text;
+}
+
+// The lowest rank whose `failure` is not empty (size when none), with its
+// message, on every rank.
+struct Failure {
+  int rank;
+  std::string message;
+};
+Failure first_failure(const std::string &failure, int rank, int size, MPI_Comm comm) {
+  int failing = failure.empty() ? size : rank, first = size;
+  MPI_Allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, comm);
+  return {first, first < size ? broadcast(failure, first, comm) : std::string()};
+}
+
+// slot[r]: the index of rank r in d.neighbours (unused for the others).
+std::vector<std::size_t> neighbour_slots(const DistributedMesh &d) {
+  std::vector<std::size_t> slot(std::size_t(d.size), std::size_t(-1));
+  for (std::size_t i = 0; i < d.neighbours.size(); ++i)
+    slot[std::size_t(d.neighbours[i])] = i;
+  return slot;
+}
+
 bool any_rank(bool mine, MPI_Comm comm) {
   int v = mine, all = 0;
   MPI_Allreduce(&v, &all, 1, MPI_INT, MPI_LOR, comm);
@@ -370,10 +399,7 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
       refusal = "the mesh has " + std::to_string(mesh.num_cells()) + " cells, fewer than the " +
                 std::to_string(d.size) + " ranks";
   }
-  std::uint64_t len = refusal.size();
-  MPI_Bcast(&len, 1, MPI_UINT64_T, root, dup);
-  refusal.resize(len);
-  MPI_Bcast(refusal.data(), int(len), MPI_CHAR, root, dup);
+  refusal = broadcast(refusal, root, dup);
   if (!refusal.empty())
     throw UsageError("distributed refinement: " + refusal);
 
@@ -426,7 +452,6 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
       Writer w;
       w.put<std::int32_t>(mesh.dim);
       w.put<std::uint8_t>(std::uint8_t(mesh.marking));
-      w.put(cells);
       w.put(verts);
       std::vector<double> coords;
       coords.reserve(verts.size() * std::size_t(mesh.dim));
@@ -529,7 +554,6 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
   Mesh &m = d.local;
   m.dim = r.get<std::int32_t>();
   m.marking = Marking(r.get<std::uint8_t>());
-  d.input_cell = r.get_vector<std::uint64_t>();
   d.input_vertex = r.get_vector<std::uint64_t>();
   m.coords = r.get_vector<double>();
   m.cells = r.get_vector<VertexId>();
@@ -626,9 +650,7 @@ DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &se
     }
   };
   local_refine(selected, {});
-  std::vector<std::size_t> slot_of(std::size_t(d.size), std::size_t(-1));
-  for (std::size_t i = 0; i < d.neighbours.size(); ++i)
-    slot_of[std::size_t(d.neighbours[i])] = i;
+  const std::vector<std::size_t> slot_of = neighbour_slots(d);
   std::vector<double> pending; // received edges with an end not here (yet)
   for (;;) {
     // The vertices made since the last exchange: who may hold them, and the
@@ -684,17 +706,8 @@ DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &se
     ++result.rounds;
     local_refine({}, split);
   }
-  {
-    int failing = failure.empty() ? d.size : d.rank, first = d.size;
-    MPI_Allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, d.comm.get());
-    if (first < d.size) {
-      std::uint64_t len = failure.size();
-      MPI_Bcast(&len, 1, MPI_UINT64_T, first, d.comm.get());
-      failure.resize(len);
-      MPI_Bcast(failure.data(), int(len), MPI_CHAR, first, d.comm.get());
-      throw CheckError("part " + std::to_string(first) + ": " + failure);
-    }
-  }
+  if (const Failure f = first_failure(failure, d.rank, d.size, d.comm.get()); f.rank < d.size)
+    throw CheckError("part " + std::to_string(f.rank) + ": " + f.message);
   result.precision_reached = any_rank(precision, d.comm.get());
   result.selected = sum_ranks(selected.size(), d.comm.get());
   result.bisections = sum_ranks(bisections, d.comm.get());
@@ -711,9 +724,7 @@ void count_global(DistributedMesh &d) {
   const Mesh &m = d.local;
   d.global_cells = sum_ranks(m.num_cells(), d.comm.get());
   std::vector<std::vector<double>> out(d.neighbours.size());
-  std::vector<std::size_t> slot_of(std::size_t(d.size), std::size_t(-1));
-  for (std::size_t i = 0; i < d.neighbours.size(); ++i)
-    slot_of[std::size_t(d.neighbours[i])] = i;
+  const std::vector<std::size_t> slot_of = neighbour_slots(d);
   for (std::size_t v = 0; v < m.num_vertices(); ++v)
     for (int r : d.sharers[v])
       if (r > d.rank) {
@@ -761,9 +772,7 @@ namespace {
 double matched_border_measure(const DistributedMesh &d, bool &twice) {
   const Mesh &m = d.local;
   const int dim = m.dim, n = m.cell_size();
-  std::vector<std::size_t> slot_of(std::size_t(d.size), std::size_t(-1));
-  for (std::size_t i = 0; i < d.neighbours.size(); ++i)
-    slot_of[std::size_t(d.neighbours[i])] = i;
+  const std::vector<std::size_t> slot_of = neighbour_slots(d);
   // Facets of the cells with dim shared vertices or more, counted.
   std::unordered_map<FaceKey, int, FaceKeyHash> count;
   for (std::size_t c = 0; c < m.num_cells(); ++c) {
@@ -845,15 +854,11 @@ CheckResult check_refined(const DistributedMesh &d, const Invariants &part_origi
     result.failure = why;
   };
   if (any[0]) {
-    // The first failing rank's message, for every rank.
-    int failing = local.ok ? d.size : d.rank, first = 0;
-    MPI_Allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, d.comm.get());
-    std::uint64_t len = local.failure.size();
-    MPI_Bcast(&len, 1, MPI_UINT64_T, first, d.comm.get());
-    std::string msg = local.failure;
-    msg.resize(len);
-    MPI_Bcast(msg.data(), int(len), MPI_CHAR, first, d.comm.get());
-    fail("part " + std::to_string(first) + ": " + msg);
+    const std::string mine = local.ok                ? std::string()
+                             : local.failure.empty() ? "its final check"
+                                                     : local.failure;
+    const Failure f = first_failure(mine, d.rank, d.size, d.comm.get());
+    fail("part " + std::to_string(f.rank) + ": " + f.message);
   } else if (any[1]) {
     fail("a facet is shared by three or more cells across parts");
   } else if (any[2]) {
@@ -1228,10 +1233,7 @@ bool rebalance(DistributedMesh &d, const Invariants &original, double tolerance)
     if (!check.ok)
       failure = check.failure.empty() ? "the gathered mesh fails the final check" : check.failure;
   }
-  std::uint64_t len = failure.size();
-  MPI_Bcast(&len, 1, MPI_UINT64_T, 0, d.comm.get());
-  failure.resize(len);
-  MPI_Bcast(failure.data(), int(len), MPI_CHAR, 0, d.comm.get());
+  failure = broadcast(failure, 0, d.comm.get());
   if (!failure.empty())
     throw CheckError("before rebalancing: " + failure);
   MPI_Comm comm = d.comm.get();
@@ -1352,17 +1354,13 @@ void write_pvtu(const std::string &path, DistributedMesh &d, bool force,
       error = e.what();
     }
     // Every rank renames only when every rank has written.
-    int failing = error.empty() ? d.size : d.rank, first = d.size;
-    MPI_Allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, d.comm.get());
-    if (first == d.size) {
+    const Failure f = first_failure(error, d.rank, d.size, d.comm.get());
+    if (f.rank == d.size) {
       outputs.commit();
       MPI_Barrier(d.comm.get());
       return;
     }
-    std::uint64_t len = error.size();
-    MPI_Bcast(&len, 1, MPI_UINT64_T, first, d.comm.get());
-    error.resize(len);
-    MPI_Bcast(error.data(), int(len), MPI_CHAR, first, d.comm.get());
+    error = f.message;
   }
   throw InputError({}, error);
 }
