@@ -59,6 +59,10 @@ struct DistributedMesh {
   // superset: a vertex made on an edge gets the ranks both ends have.
   std::vector<std::vector<int>> sharers;
   std::vector<int> neighbours; // sorted: every rank in some sharers list
+  // When the input had a tree: per input vertex of `local`, the coordinates
+  // of the two ends of its parent edge, 2 dim doubles (NaN for an original
+  // vertex), which the tree of a .pvtu's pieces names (write_pvtu).
+  std::vector<double> input_parent_points;
   // On the root, when the input had a tree: its parent_edge and level.
   std::vector<VertexId> input_parent_edge;
   std::vector<std::uint16_t> input_level;
@@ -137,12 +141,12 @@ double imbalance(const DistributedMesh &d);
 bool rebalance(DistributedMesh &d, const Invariants &original, double tolerance = 0.1);
 
 // Writes `path` (.pvtu) on rank 0 and one piece per rank beside it,
-// <stem>_<rank>.vtu, with the bisection state (not the tree: a piece may
-// lack a vertex's parents; gather to coarsen later): VTK's parallel reader (the
-// one ParaView uses) reads it. Every file is written to a temporary name and
-// renamed only when all ranks have written theirs. Existing files are
-// replaced only with `force`. Collective; throws InputError on every rank
-// when some rank failed.
+// <stem>_<rank>.vtu, with the bisection state and the tree (its parents
+// named by coordinates, as a piece may lack them: the bisect:piece_* arrays
+// of state.hpp, which read_pvtu turns back into the tree, so a .pvtu can be
+// coarsened): VTK's parallel reader (the one ParaView uses) reads it. Every file is written to a
+// temporary name and renamed only when all ranks have written theirs. Existing files are replaced
+// only with `force`. Collective; throws InputError on every rank when some rank failed.
 void write_pvtu(const std::string &path, DistributedMesh &d, bool force,
                 const WriteOptions &options = {});
 

@@ -64,6 +64,18 @@ inline constexpr const char *kParentAArray = "bisect:parent_a";
 inline constexpr const char *kParentBArray = "bisect:parent_b";
 inline constexpr const char *kLevelArray = "bisect:level";
 
+// The tree in the pieces of a .pvtu (a piece may lack a vertex's parents,
+// so they are named by coordinates; read_pvtu turns these into the arrays
+// above and drops them):
+//   bisect:piece_generation (cell) as bisect:generation;
+//   bisect:piece_level (point) as bisect:level;
+//   bisect:piece_parents (point, 2 dim components) the coordinates of the
+//     two ends of the vertex's parent edge; the vertex's own twice for an
+//     original vertex.
+inline constexpr const char *kPieceGenerationArray = "bisect:piece_generation";
+inline constexpr const char *kPieceLevelArray = "bisect:piece_level";
+inline constexpr const char *kPieceParentsArray = "bisect:piece_parents";
+
 // Adds the tree arrays when the mesh has a tree; otherwise removes any
 // (e.g. copied from another mesh's point data by a tool).
 void encode_tree(Mesh &mesh);

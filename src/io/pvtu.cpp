@@ -53,6 +53,160 @@ std::vector<std::string> piece_sources(const std::string &path) {
   return sources;
 }
 
+const DataArray *find_array(const std::vector<DataArray> &arrays, const char *name) {
+  for (const DataArray &a : arrays)
+    if (a.name == name)
+      return &a;
+  return nullptr;
+}
+
+// The tree of merged pieces (write_pvtu, state.hpp): the parents named by
+// coordinates become vertex ids, and the vertices after the first `fixed`
+// (those without a global id, made since the run started) are ordered by
+// level, then after their parents, then as they are, so that parents have
+// the smaller ids the tree's arrays ask for. Adds the tree's arrays and
+// drops the piece arrays; decode_tree then checks the tree as for a .vtu.
+void tree_from_pieces(Mesh &out, std::size_t fixed, const std::string &path) {
+  const DataArray *gen = find_array(out.cell_data, kPieceGenerationArray);
+  const DataArray *lev = find_array(out.point_data, kPieceLevelArray);
+  const DataArray *par = find_array(out.point_data, kPieceParentsArray);
+  if (!gen && !lev && !par)
+    return;
+  const int dim = out.dim;
+  if (!gen || !lev || !par)
+    throw InputError(path, std::string("the pieces' tree is incomplete: ") + kPieceGenerationArray +
+                               ", " + kPieceLevelArray + " and " + kPieceParentsArray +
+                               " come together");
+  if (par->components != 2 * dim || lev->components != 1 || gen->components != 1)
+    throw InputError(path, std::string("the pieces' tree arrays have the wrong number of "
+                                       "components (") +
+                               kPieceParentsArray + ": " + std::to_string(2 * dim) + ")");
+  const std::size_t nv = out.num_vertices();
+  // Vertices by coordinates, to find each parent.
+  std::vector<VertexId> by_point(nv);
+  std::iota(by_point.begin(), by_point.end(), VertexId(0));
+  auto less = [&](const double *x, const double *y) {
+    return std::lexicographical_compare(x, x + dim, y, y + dim);
+  };
+  std::sort(by_point.begin(), by_point.end(),
+            [&](VertexId a, VertexId b) { return less(out.point(a), out.point(b)); });
+  auto find = [&](const double *x) -> VertexId {
+    auto it = std::lower_bound(by_point.begin(), by_point.end(), x,
+                               [&](VertexId a, const double *y) { return less(out.point(a), y); });
+    if (it == by_point.end() || !std::equal(x, x + dim, out.point(*it)))
+      return kNoVertex;
+    return *it;
+  };
+  std::vector<VertexId> parent(2 * nv, kNoVertex);
+  std::vector<double> level(nv, 0.0);
+  for (std::size_t v = 0; v < nv; ++v) {
+    const double *p = par->values.data() + v * 2 * std::size_t(dim);
+    level[v] = lev->values[v];
+    if (std::equal(p, p + dim, out.point(VertexId(v))) &&
+        std::equal(p + dim, p + 2 * dim, out.point(VertexId(v))))
+      continue; // an original vertex
+    for (int k = 0; k < 2; ++k) {
+      parent[2 * v + std::size_t(k)] = find(p + k * dim);
+      if (parent[2 * v + std::size_t(k)] == kNoVertex) {
+        std::ostringstream where;
+        where.precision(17);
+        for (int i = 0; i < dim; ++i)
+          where << (i ? ", " : "(") << p[k * dim + i];
+        throw InputError(
+            path, "point " + std::to_string(v) + " of the merged pieces: " + kPieceParentsArray +
+                      " names an end of its parent edge, " + where.str() + "), that no piece has");
+      }
+    }
+  }
+  // The new order of the vertices after `fixed`: by level, then by height
+  // (0 when no parent of the same level follows `fixed`, else one more than
+  // the highest such parent), then as they are.
+  std::vector<int> height(nv, -1); // -1 not yet, -2 waiting for its parents
+  std::vector<VertexId> stack;
+  for (std::size_t v0 = fixed; v0 < nv; ++v0) {
+    stack.assign(1, VertexId(v0));
+    while (!stack.empty()) {
+      const VertexId u = stack.back();
+      if (height[u] >= 0) {
+        stack.pop_back();
+        continue;
+      }
+      int h = 0;
+      bool ready = true;
+      for (int k = 0; k < 2; ++k) {
+        const VertexId q = parent[2 * std::size_t(u) + std::size_t(k)];
+        if (q == kNoVertex || q < fixed || level[q] != level[u])
+          continue;
+        if (height[q] >= 0) {
+          h = std::max(h, height[q] + 1);
+        } else if (height[q] == -2 || q == u) {
+          throw InputError(path, "the pieces' tree has a cycle (a vertex is its own ancestor)");
+        } else {
+          stack.push_back(q);
+          ready = false;
+        }
+      }
+      if (ready) {
+        height[u] = h;
+        stack.pop_back();
+      } else {
+        height[u] = -2;
+      }
+    }
+  }
+  std::vector<VertexId> order(nv);
+  std::iota(order.begin(), order.end(), VertexId(0));
+  std::stable_sort(order.begin() + std::ptrdiff_t(fixed), order.end(), [&](VertexId a, VertexId b) {
+    return level[a] != level[b] ? level[a] < level[b] : height[a] < height[b];
+  });
+  std::vector<VertexId> id(nv);
+  for (std::size_t i = 0; i < nv; ++i)
+    id[order[i]] = VertexId(i);
+  // Renumber the mesh.
+  std::vector<double> coords(out.coords.size());
+  for (std::size_t i = 0; i < nv; ++i)
+    std::copy_n(out.point(order[i]), dim, coords.data() + i * std::size_t(dim));
+  out.coords = std::move(coords);
+  for (DataArray &a : out.point_data) {
+    const std::size_t k = std::size_t(a.components);
+    std::vector<double> values(a.values.size());
+    for (std::size_t i = 0; i < nv; ++i)
+      std::copy_n(a.values.data() + order[i] * k, k, values.data() + i * k);
+    a.values = std::move(values);
+  }
+  for (VertexId &x : out.cells)
+    x = id[x];
+  for (Entities &block : out.entities)
+    for (VertexId &x : block.vertices)
+      x = id[x];
+  // The tree's arrays (state.hpp), the piece arrays dropped.
+  DataArray pa{kParentAArray, 1, std::vector<double>(nv, -1.0), ValueType::Int32};
+  DataArray pb{kParentBArray, 1, std::vector<double>(nv, -1.0), ValueType::Int32};
+  DataArray lv{kLevelArray, 1, std::vector<double>(nv, 0.0), ValueType::UInt16};
+  for (std::size_t i = 0; i < nv; ++i) {
+    const VertexId v = order[i];
+    lv.values[i] = level[v];
+    if (parent[2 * std::size_t(v)] == kNoVertex)
+      continue;
+    VertexId a = id[parent[2 * std::size_t(v)]], b = id[parent[2 * std::size_t(v) + 1]];
+    if (a > b)
+      std::swap(a, b);
+    pa.values[i] = double(a);
+    pb.values[i] = double(b);
+  }
+  DataArray generation{kGenerationArray, 1, gen->values, ValueType::UInt16};
+  auto piece_array = [](const DataArray &a) {
+    return a.name == kPieceGenerationArray || a.name == kPieceLevelArray ||
+           a.name == kPieceParentsArray;
+  };
+  std::erase_if(out.point_data, piece_array);
+  std::erase_if(out.cell_data, piece_array);
+  out.cell_data.push_back(std::move(generation));
+  out.point_data.push_back(std::move(pa));
+  out.point_data.push_back(std::move(pb));
+  out.point_data.push_back(std::move(lv));
+}
+
 // The arrays of `a` and `b` by name, components and type, for a message.
 bool same_arrays(const std::vector<DataArray> &a, const std::vector<DataArray> &b) {
   if (a.size() != b.size())
@@ -82,8 +236,9 @@ Mesh read_pvtu(const std::string &path) {
       throw InputError(path, std::string("piece ") + e.what());
     }
   }
-  // A piece's tree arrays (state.hpp) name its own points: they mean
-  // nothing once the pieces are merged, so a .pvtu has no tree.
+  // A piece's own tree arrays (state.hpp) would name its own points: they
+  // mean nothing once the pieces are merged (a .pvtu's tree is in the
+  // bisect:piece_* arrays, see tree_from_pieces).
   for (Mesh &m : pieces) {
     auto tree = [](const DataArray &a) {
       return a.name == kGenerationArray || a.name == kParentAArray || a.name == kParentBArray ||
@@ -102,9 +257,6 @@ Mesh read_pvtu(const std::string &path) {
     if (!same_arrays(m.point_data, first.point_data) || !same_arrays(m.cell_data, first.cell_data))
       throw InputError(path, "piece " + sources[p] +
                                  " has other point or cell arrays than the first piece");
-    if (m.entities.size() != first.entities.size())
-      throw InputError(path, "piece " + sources[p] +
-                                 " has other lower-dimensional cells than the first piece");
   }
   // Global ids: where every piece has the array, ids >= 0 name the same
   // vertex across pieces (and give their order); -1 is a vertex made by
@@ -201,38 +353,55 @@ Mesh read_pvtu(const std::string &path) {
       out.cell_data[a].values.insert(out.cell_data[a].values.end(), m.cell_data[a].values.begin(),
                                      m.cell_data[a].values.end());
   }
-  // Lower-dimensional cells: one on the border of two pieces is in both;
-  // it is kept from the first piece that has it (as often as it has it).
-  for (std::size_t b = 0; b < first.entities.size(); ++b) {
+  // Lower-dimensional cells, a block per dimension (a piece without cells
+  // of some dimension has no block for it): one on the border of two pieces
+  // is in both; it is kept from the first piece that has it (as often as it
+  // has it).
+  std::vector<int> dims;
+  for (const Mesh &m : pieces)
+    for (const Entities &e : m.entities)
+      dims.push_back(e.dim);
+  std::sort(dims.begin(), dims.end());
+  dims.erase(std::unique(dims.begin(), dims.end()), dims.end());
+  for (const int dim_b : dims) {
+    const Entities *model = nullptr;
     Entities block;
-    block.dim = first.entities[b].dim;
-    for (const DataArray &a : first.entities[b].data)
-      block.data.push_back({a.name, a.components, {}, a.type});
+    block.dim = dim_b;
     std::map<std::array<VertexId, 4>, std::size_t> owner; // key -> first piece holding it
     for (std::size_t p = 0; p < pieces.size(); ++p) {
-      const Entities &e = pieces[p].entities[b];
-      if (e.dim != block.dim || !same_arrays(e.data, first.entities[b].data))
-        throw InputError(path, "piece " + sources[p] +
-                                   " has other lower-dimensional cells than the first piece");
-      for (std::size_t i = 0; i < e.size(); ++i) {
-        VertexId ids[4];
-        for (int k = 0; k <= e.dim; ++k)
-          ids[k] = merged[p][e.entity(i)[k]];
-        const FaceKey key = face_key(ids, e.dim + 1);
-        const std::size_t holder = owner.emplace(key.ids, p).first->second;
-        if (holder != p)
+      for (const Entities &e : pieces[p].entities) {
+        if (e.dim != dim_b)
           continue;
-        block.vertices.insert(block.vertices.end(), ids, ids + e.dim + 1);
-        for (std::size_t a = 0; a < e.data.size(); ++a) {
-          const std::size_t c = std::size_t(e.data[a].components);
-          block.data[a].values.insert(block.data[a].values.end(),
-                                      e.data[a].values.begin() + std::ptrdiff_t(i * c),
-                                      e.data[a].values.begin() + std::ptrdiff_t((i + 1) * c));
+        if (!model) {
+          model = &e;
+          for (const DataArray &a : e.data)
+            block.data.push_back({a.name, a.components, {}, a.type});
+        } else if (!same_arrays(e.data, model->data)) {
+          throw InputError(path, "piece " + sources[p] + "'s cells of dimension " +
+                                     std::to_string(dim_b) +
+                                     " have other arrays than those of an earlier piece");
+        }
+        for (std::size_t i = 0; i < e.size(); ++i) {
+          VertexId ids[4];
+          for (int k = 0; k <= e.dim; ++k)
+            ids[k] = merged[p][e.entity(i)[k]];
+          const FaceKey key = face_key(ids, e.dim + 1);
+          const std::size_t holder = owner.emplace(key.ids, p).first->second;
+          if (holder != p)
+            continue;
+          block.vertices.insert(block.vertices.end(), ids, ids + e.dim + 1);
+          for (std::size_t a = 0; a < e.data.size(); ++a) {
+            const std::size_t c = std::size_t(e.data[a].components);
+            block.data[a].values.insert(block.data[a].values.end(),
+                                        e.data[a].values.begin() + std::ptrdiff_t(i * c),
+                                        e.data[a].values.begin() + std::ptrdiff_t((i + 1) * c));
+          }
         }
       }
     }
     out.entities.push_back(std::move(block));
   }
+  tree_from_pieces(out, by_id.size(), path);
   return out;
 }
 

@@ -518,6 +518,19 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
         w.put(generation);
         w.put(parents);
         w.put(level);
+        // Every vertex's parents by their coordinates (NaN: an original
+        // vertex), for the tree of a .pvtu's pieces (write_pvtu).
+        std::vector<double> parent_points(verts.size() * 2 * std::size_t(mesh.dim),
+                                          std::numeric_limits<double>::quiet_NaN());
+        for (std::size_t i = 0; i < verts.size(); ++i) {
+          const VertexId a = mesh.parent_edge[2 * verts[i]], b = mesh.parent_edge[2 * verts[i] + 1];
+          if (a == kNoVertex)
+            continue;
+          double *to = parent_points.data() + i * 2 * std::size_t(mesh.dim);
+          std::copy_n(mesh.point(a), mesh.dim, to);
+          std::copy_n(mesh.point(b), mesh.dim, to + mesh.dim);
+        }
+        w.put(parent_points);
       }
       w.put<std::uint64_t>(mesh.entities.size());
       for (std::size_t b = 0; b < mesh.entities.size(); ++b) {
@@ -581,6 +594,7 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
     m.generation = r.get_vector<std::uint16_t>();
     m.parent_edge = r.get_vector<VertexId>();
     m.level = r.get_vector<std::uint16_t>();
+    d.input_parent_points = r.get_vector<double>();
   }
   m.entities.resize(r.get<std::uint64_t>());
   for (Entities &block : m.entities) {
@@ -1305,7 +1319,8 @@ void write_pvtu(const std::string &path, DistributedMesh &d, bool force,
         h_pvtu = outputs.add(path);
       WriteOptions o = options;
       o.format = "vtu";
-      // Without the tree (see distributed.hpp), put back after writing.
+      // The tree goes as the piece arrays below; put back after writing.
+      const bool tree = d.local.has_tree();
       std::vector<std::uint16_t> generation = std::move(d.local.generation),
                                  level = std::move(d.local.level);
       std::vector<VertexId> parents = std::move(d.local.parent_edge);
@@ -1317,9 +1332,45 @@ void write_pvtu(const std::string &path, DistributedMesh &d, bool force,
       for (std::size_t v = 0; v < d.input_vertex.size(); ++v)
         ids.values[v] = double(d.input_vertex[v]);
       d.local.point_data.push_back(std::move(ids));
+      // The tree, its parents named by coordinates (state.hpp).
+      if (tree) {
+        const Mesh &m = d.local;
+        const std::size_t nv = m.num_vertices(), k = 2 * std::size_t(m.dim);
+        DataArray gen{kPieceGenerationArray, 1,
+                      std::vector<double>(generation.begin(), generation.end()), ValueType::UInt16};
+        DataArray lev{kPieceLevelArray, 1, std::vector<double>(nv, 0.0), ValueType::UInt16};
+        DataArray par{kPieceParentsArray, int(k), std::vector<double>(nv * k), ValueType::Float64};
+        for (std::size_t v = 0; v < nv; ++v) {
+          double *to = par.values.data() + v * k;
+          const double *far = v < d.input_vertex.size() && !d.input_parent_points.empty()
+                                  ? d.input_parent_points.data() + v * k
+                                  : nullptr;
+          if (parents[2 * v] != kNoVertex) {
+            std::copy_n(m.point(parents[2 * v]), m.dim, to);
+            std::copy_n(m.point(parents[2 * v + 1]), m.dim, to + m.dim);
+          } else if (far && !std::isnan(far[0])) {
+            std::copy_n(far, k, to);
+          } else {
+            std::copy_n(m.point(VertexId(v)), m.dim, to);
+            std::copy_n(m.point(VertexId(v)), m.dim, to + m.dim);
+          }
+          const bool made = !std::equal(to, to + m.dim, m.point(VertexId(v)));
+          lev.values[v] = level.size() == nv ? double(level[v]) : double(made);
+          if (made != (lev.values[v] != 0))
+            throw CheckError("write_pvtu: rank " + std::to_string(d.rank) +
+                             " lost the parents of " + "a vertex made by bisection");
+        }
+        d.local.cell_data.push_back(std::move(gen));
+        d.local.point_data.push_back(std::move(lev));
+        d.local.point_data.push_back(std::move(par));
+      }
       auto drop_ids = [&] {
-        std::erase_if(d.local.point_data,
-                      [](const DataArray &a) { return a.name == kGlobalIdArray; });
+        auto piece_array = [](const DataArray &a) {
+          return a.name == kGlobalIdArray || a.name == kPieceGenerationArray ||
+                 a.name == kPieceLevelArray || a.name == kPieceParentsArray;
+        };
+        std::erase_if(d.local.point_data, piece_array);
+        std::erase_if(d.local.cell_data, piece_array);
       };
       try {
         write_mesh_file_with_state(outputs.file(h_piece), piece, d.local, o);
