@@ -2,6 +2,9 @@
 #include "cli.hpp"
 
 #include "bisect/coarsen.hpp"
+#ifdef BISECT_MPI
+#include "mpi/refine_mpi.hpp"
+#endif
 
 #include <cmath>
 #include <filesystem>
@@ -50,6 +53,31 @@ int run_coarsen(const CoarsenArgs &a) {
     throw UsageError("--indicator needs --below X (cells whose value is below X are coarsened)");
   if (a.indicator.empty() && !std::isnan(a.below))
     throw UsageError("--below needs --indicator NAME");
+#ifdef BISECT_MPI
+  // Under mpirun, or for a .pvtu: the distributed coarsen (README, "MPI").
+  if (mpi_world_size() > 1 || a.output.ends_with(".pvtu")) {
+    if (a.origin || a.output == "-" || a.input == "-" || !a.format.empty())
+      throw UsageError("distributed coarsen (mpirun or a .pvtu output) takes --region, "
+                       "--indicator with --below, --all, --passes, --sum, --check, --force, "
+                       "--quiet and --json; --origin, --format and - for a file need a serial run");
+    if (a.output.empty())
+      throw UsageError("distributed coarsen needs -o (a .pvtu, or a .vtu/.msh to gather into)");
+    DistributedCoarsenArgs d;
+    d.input = a.input;
+    d.output = a.output;
+    d.region = a.region;
+    d.indicator = a.indicator;
+    d.below = a.below;
+    d.all = a.all;
+    d.force = a.force;
+    d.quiet = a.flags.quiet;
+    d.json = a.flags.json;
+    d.check = a.check;
+    d.passes = a.passes;
+    d.sums = a.sums;
+    return run_coarsen_mpi(d);
+  }
+#endif
   const std::string stem =
       a.input == "-" ? std::string("stdin") : fs::path(a.input).stem().string();
   // -o -: the mesh goes to standard output.

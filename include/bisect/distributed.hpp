@@ -13,6 +13,7 @@
 #pragma once
 
 #include "bisect/check.hpp"
+#include "bisect/coarsen.hpp"
 #include "bisect/io.hpp"
 #include "bisect/measure.hpp"
 #include "bisect/mesh.hpp"
@@ -22,6 +23,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -139,6 +141,21 @@ double imbalance(const DistributedMesh &d);
 // invariants and border_measure() must then be taken again. Explicit
 // marking keeps its parts (its edge ranks do not travel).
 bool rebalance(DistributedMesh &d, const Invariants &original, double tolerance = 0.1);
+
+// coarsen() (coarsen.hpp) across ranks: `marks` has one entry per cell of
+// d.local (non-zero: may be merged away). Collective. The passes run on the
+// root today: the parts are gathered there (gather(), with the marks), the
+// serial passes run and the result must pass check_refined against the
+// gathered mesh's invariants (else CheckError on every rank), and the
+// coarsened mesh is distributed again along the Hilbert curve, so the result
+// is the serial coarsening's for every number of ranks; the root holds the
+// whole mesh meanwhile, as rebalance() does. `on_pass` is called on the
+// root. The parts' own invariants and border_measure() must then be taken
+// again. Throws UsageError for explicit marking (its edge ranks do not
+// travel).
+CoarsenResult coarsen(DistributedMesh &d, const std::vector<char> &marks,
+                      const CoarsenOptions &options = {},
+                      const std::function<void(const CoarsenPass &)> &on_pass = {});
 
 // Writes `path` (.pvtu) on rank 0 and one piece per rank beside it,
 // <stem>_<rank>.vtu, with the bisection state and the tree (its parents

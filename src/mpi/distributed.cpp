@@ -1,6 +1,7 @@
 // Distributed refinement (bisect/distributed.hpp): partition, exchange of
 // bisected border edges, the final check across parts, gathering and .pvtu.
 #include "bisect/distributed.hpp"
+#include "bisect/coarsen.hpp"
 
 // GCC 12 warns falsely about std::string concatenation (-Wrestrict, its bug
 // 105329) and about std::sort's insertion step on a vector of structs
@@ -1254,6 +1255,66 @@ bool rebalance(DistributedMesh &d, const Invariants &original, double tolerance)
   DistributedMesh fresh = distribute(whole, 0, comm);
   d = std::move(fresh);
   return true;
+}
+
+// ---------------------------------------------------------------- coarsen
+
+CoarsenResult coarsen(DistributedMesh &d, const std::vector<char> &marks,
+                      const CoarsenOptions &options,
+                      const std::function<void(const CoarsenPass &)> &on_pass) {
+  MPI_Comm comm = d.comm.get();
+  std::string failure;
+  if (marks.size() != d.local.num_cells())
+    failure = "coarsen: " + std::to_string(marks.size()) + " marks for a part of " +
+              std::to_string(d.local.num_cells()) + " cells";
+  else if (d.local.marking == Marking::Explicit)
+    failure = "coarsen: a mesh with explicit marking (bisect:edge_rank) is coarsened without "
+              "mpirun (its edge ranks do not travel between ranks)";
+  if (const Failure f = first_failure(failure, d.rank, d.size, comm); f.rank < d.size)
+    throw UsageError(f.message);
+  // The marks travel with their cells to the root.
+  constexpr const char *kMarks = "bisect:coarsen_marked";
+  d.local.cell_data.push_back(
+      {kMarks, 1, std::vector<double>(marks.begin(), marks.end()), ValueType::Int8});
+  Mesh whole;
+  try {
+    whole = gather(d, 0);
+  } catch (...) {
+    d.local.cell_data.pop_back();
+    throw;
+  }
+  d.local.cell_data.pop_back();
+  CoarsenResult result;
+  if (d.rank == 0) {
+    try {
+      auto slot = std::find_if(whole.cell_data.begin(), whole.cell_data.end(),
+                               [&](const DataArray &a) { return a.name == kMarks; });
+      std::vector<char> whole_marks(whole.num_cells(), 0);
+      for (std::size_t c = 0; c < whole.num_cells(); ++c)
+        whole_marks[c] = slot->values[c] != 0;
+      whole.cell_data.erase(slot);
+      const Invariants before = measure_invariants(whole, false);
+      result = bisect::coarsen(whole, whole_marks, options, on_pass);
+      // Coarsening keeps the domain: the serial final check, as bisect coarsen.
+      const CheckResult check = check_refined(whole, before);
+      if (!check.ok)
+        failure = "after coarsening: " + check.failure;
+    } catch (const std::exception &e) {
+      failure = e.what();
+    }
+  }
+  failure = broadcast(failure, 0, comm);
+  if (!failure.empty())
+    throw CheckError(failure);
+  std::uint64_t figures[3] = {std::uint64_t(result.passes), result.removed_vertices,
+                              result.merged_pairs};
+  MPI_Bcast(figures, 3, MPI_UINT64_T, 0, comm);
+  result.passes = int(figures[0]);
+  result.removed_vertices = figures[1];
+  result.merged_pairs = figures[2];
+  DistributedMesh fresh = distribute(whole, 0, comm);
+  d = std::move(fresh);
+  return result;
 }
 
 // ---------------------------------------------------------------- .pvtu

@@ -1,7 +1,9 @@
 // The README's library example for distributed refinement (README, "MPI"):
 // rank 0 loads and marks a mesh, the ranks refine their parts around a
-// region for three iterations, check across parts and write a .pvtu.
-// usage: mpirun -np P example IN REGION.json OUT.pvtu
+// region for three iterations, check across parts and write a .pvtu; with a
+// fourth argument, then undo one iteration everywhere (coarsen) and write
+// that too.
+// usage: mpirun -np P example IN REGION.json OUT.pvtu [COARSENED.pvtu]
 #include <bisect/bisect.hpp>
 #include <bisect/distributed.hpp>
 
@@ -36,6 +38,20 @@ int main(int argc, char **argv) {
       bisect::write_pvtu(argv[3], d, /*force=*/true);
     else
       code = 2;
+    if (argc > 4 && code == 0) {
+      // Every cell marked: one pass undoes the newest iteration.
+      const std::vector<char> all(d.local.num_cells(), 1);
+      const bisect::CoarsenResult c = bisect::coarsen(d, all);
+      if (rank == 0)
+        std::printf("coarsened: %zu vertices removed, %zu cells\n", c.removed_vertices,
+                    d.global_cells);
+      const bisect::CheckResult again = bisect::check_refined(
+          d, bisect::measure_invariants(d.local, false), bisect::border_measure(d));
+      if (again.ok)
+        bisect::write_pvtu(argv[4], d, /*force=*/true);
+      else
+        code = 2;
+    }
   }
   MPI_Finalize();
   return code;

@@ -164,4 +164,60 @@ for c in "cube.vtu sphere.json 5" "$ROOT/data/ball.msh $R/hemisphere.json 3" "hy
   cells() { "$BISECT" info "$1" | sed -n 's/^cells: //p'; }
   (($(cells gc.vtu) < $(cells g.vtu))) || fail "$c: coarsening the gathered file removed nothing"
 done
+# Coarsening across ranks (coarsen() of distributed.hpp): --all and a
+# region (to the end, -n 0), from a file and from the .pvtu of a distributed
+# refine (its pieces carry the tree, by coordinates), on P = 1..4 ranks, as a
+# .pvtu and gathered, equals coarsening the serial run's output; so does
+# coarsening the .pvtu serially. The tagged box's 3-rank pieces do not all
+# hold a tagged curve; the 4D case rebalances.
+echo '{"type": "sphere", "center": [0.3, 0.4, 0.2], "radius": 0.3}' >ball3.json
+# Coarsened where x <= 0.5 (a box over the half of each domain).
+echo '{"type": "box", "min": [-1, -1], "max": [0.5, 2]}' >half2.json
+echo '{"type": "box", "min": [-1, -1, -1], "max": [0.5, 2, 2]}' >half3.json
+echo '{"type": "box", "min": [-1, -1, -1, -1], "max": [0.5, 2, 2, 2]}' >half4.json
+for c in "square.vtu $R/circle.json 6 half2.json" "cube.vtu sphere.json 5 half3.json" \
+  "$ROOT/data/box-tagged.msh ball3.json 4 half3.json" \
+  "hypercube.vtu $R/moving-sphere.json 10 half4.json"; do
+  read -r mesh region iters half <<<"$c"
+  "$BISECT" refine "$mesh" --region "$region" -n "$iters" -o s.vtu -q -f --quality-csv none
+  expect_exit 0 run_mpi 3 refine "$mesh" --region "$region" -n "$iters" -o p.pvtu -q -f \
+    --quality-csv none
+  for mode in "--all -n 2" "--region $half -n 0"; do
+    # shellcheck disable=SC2086
+    "$BISECT" coarsen s.vtu $mode -o sc.vtu -q -f
+    (($("$BISECT" info sc.vtu | sed -n 's/^cells: //p') < $("$BISECT" info s.vtu | sed -n 's/^cells: //p'))) ||
+      fail "$c $mode: the serial coarsening removed nothing"
+    # shellcheck disable=SC2086
+    expect_exit 0 "$BISECT" coarsen p.pvtu $mode -o pc.vtu -q -f
+    /usr/bin/python3 "$same" sc.vtu pc.vtu >same.txt || { cat same.txt >&2; fail "$c $mode: coarsening the .pvtu serially differs"; }
+    [[ $("$BISECT" info pc.vtu | grep '^tagged') == $("$BISECT" info sc.vtu | grep '^tagged') ]] ||
+      fail "$c $mode: the tags of the coarsened .pvtu differ"
+    for p in 1 2 3 4; do
+      # shellcheck disable=SC2086
+      expect_exit 0 run_mpi $p coarsen p.pvtu $mode -o dc.pvtu -q -f
+      /usr/bin/python3 "$same" sc.vtu dc.pvtu >same.txt || { cat same.txt >&2; fail "$c $mode: coarsening on $p ranks differs"; }
+      n=$((n + 1))
+    done
+    # shellcheck disable=SC2086
+    expect_exit 0 run_mpi 2 coarsen s.vtu $mode -o dg.vtu -q -f
+    /usr/bin/python3 "$same" sc.vtu dg.vtu >same.txt || { cat same.txt >&2; fail "$c $mode: the gathered coarsening differs"; }
+    [[ $("$BISECT" info dg.vtu | grep -E '^(cells|vertices|tagged)') == $("$BISECT" info sc.vtu | grep -E '^(cells|vertices|tagged)') ]] ||
+      fail "$c $mode: bisect info of the gathered coarsening differs"
+  done
+done
+# By an indicator (--below): the cell array the refinement carried.
+for dim in 2 3 4; do
+  "$BISECT" refine eta$dim.vtu --indicator eta --top 0.3 --depth 2 -o s.vtu -q -f --quality-csv none
+  "$BISECT" coarsen s.vtu --indicator eta --below 0.5 -o sc.vtu -q -f
+  for p in 2 3; do
+    expect_exit 0 run_mpi $p coarsen s.vtu --indicator eta --below 0.5 -o dc.pvtu -q -f
+    /usr/bin/python3 "$same" sc.vtu dc.pvtu >same.txt || { cat same.txt >&2; fail "${dim}D coarsen --indicator on $p ranks differs"; }
+  done
+done
+# Options a distributed coarsen does not take, and a mesh without a tree.
+expect_exit 1 run_mpi 2 coarsen s.vtu --all --origin -o x.pvtu -q -f
+grep -q 'need a serial run' "$WORK/err" || fail "coarsen --origin under mpirun: no clear refusal"
+expect_exit 1 run_mpi 2 coarsen cube.vtu --all -o x.pvtu -f
+grep -q 'cube.vtu: carries no bisection tree' "$WORK/err" || fail "coarsen of a mesh without a tree: no clear refusal"
+[[ ! -e x.pvtu ]] || fail "a refused coarsen wrote x.pvtu"
 echo "mpi invariant: $n distributed runs (P = 1..4) equal to the serial ones, as .pvtu and gathered"

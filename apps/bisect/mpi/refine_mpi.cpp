@@ -85,15 +85,19 @@ int mpi_world_size() {
   return size;
 }
 
-int run_refine_mpi(const DistributedArgs &a) {
-  const auto t_start = std::chrono::steady_clock::now();
+void mpi_init_alone() {
   int on = 0;
   MPI_Initialized(&on);
   if (!on) {
-    // bisect refine ... -o X.pvtu without mpirun: one rank.
     MPI_Init(nullptr, nullptr);
     g_we_initialised = true;
   }
+}
+
+int run_refine_mpi(const DistributedArgs &a) {
+  const auto t_start = std::chrono::steady_clock::now();
+  // bisect refine ... -o X.pvtu without mpirun: one rank.
+  mpi_init_alone();
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   const bool pvtu = a.output.size() > 5 && a.output.substr(a.output.size() - 5) == ".pvtu";

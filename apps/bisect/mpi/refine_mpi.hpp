@@ -6,6 +6,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace bisect::cli {
 
@@ -21,14 +22,27 @@ struct DistributedArgs {
   bool force = false, quiet = false, json = false;
 };
 
+struct DistributedCoarsenArgs {
+  std::string input, output, region, indicator;
+  double below = 0;
+  bool all = false, force = false, quiet = false, json = false, check = false;
+  int passes = 1;
+  std::vector<std::string> sums;
+};
+
 // True when mpirun (or another PMI launcher) started this process.
 bool launched_by_mpirun();
 // MPI_Init when launched by mpirun; mpi_stop finalises what mpi_start began.
 void mpi_start(int *argc, char ***argv);
 void mpi_stop();
+// MPI_Init when not yet initialised (a .pvtu output without mpirun: one
+// rank); mpi_stop finalises it.
+void mpi_init_alone();
 // The ranks of MPI_COMM_WORLD (1 when MPI is not initialised).
 int mpi_world_size();
 // The distributed refine: a .pvtu output, or more than one rank.
 int run_refine_mpi(const DistributedArgs &args);
+// The distributed coarsen (coarsen() of distributed.hpp): the same cases.
+int run_coarsen_mpi(const DistributedCoarsenArgs &args);
 
 } // namespace bisect::cli

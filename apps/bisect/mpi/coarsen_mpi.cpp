@@ -1,0 +1,184 @@
+// bisect coarsen under mpirun (a BISECT_MPI build): rank 0 reads the mesh
+// and its tree, the ranks mark their parts, coarsen() of distributed.hpp
+// undoes the bisections (today through rank 0), and the result is written
+// as a .pvtu with a piece per rank, or gathered into one file.
+#include "cli.hpp"
+#include "mpi/refine_mpi.hpp"
+
+#include "bisect/coarsen.hpp"
+#include "bisect/distributed.hpp"
+
+#include <iomanip>
+#include <iostream>
+
+namespace bisect::cli {
+
+int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
+  const auto t_start = std::chrono::steady_clock::now();
+  // bisect coarsen ... -o X.pvtu without mpirun: one rank.
+  mpi_init_alone();
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  const bool pvtu = a.output.ends_with(".pvtu");
+  const bool quiet = a.quiet || rank != 0;
+
+  // Rank 0 reads and validates; a failure there ends every rank with its
+  // exit code (only rank 0 prints it).
+  Mesh mesh;
+  Invariants original;
+  int failure = 0;
+  std::string message;
+  std::unique_ptr<OutputSet> outputs;
+  int h_mesh = -1;
+  if (rank == 0) {
+    try {
+      std::vector<std::string> inputs{a.input};
+      if (!a.region.empty())
+        inputs.push_back(a.region);
+      if (!pvtu)
+        check_extension(a.output);
+      outputs = std::make_unique<OutputSet>(inputs, a.force);
+      if (!pvtu)
+        h_mesh = outputs->add(a.output);
+      mesh = load_mesh(a.input, load_progress(a.input, quiet));
+      if (!pvtu)
+        check_output_format(a.output, mesh.dim);
+      if (!a.region.empty())
+        (void)read_region(a.region, mesh.dim);
+      if (!a.indicator.empty())
+        (void)cell_indicator(mesh, a.indicator, a.input);
+      // (The serial coarsen writes such a mesh unchanged.)
+      if (!mesh.marked() || !mesh.has_tree())
+        throw InputError(a.input, "carries no bisection tree (bisect:generation, "
+                                  "bisect:parent_a/b): nothing to coarsen");
+      original = measure_invariants(mesh, a.check);
+      if (!quiet)
+        std::cerr << "bisect: " << a.input << ": " << mesh.dim << "D, "
+                  << with_commas(mesh.num_cells()) << " cells, " << with_commas(mesh.num_vertices())
+                  << " vertices\n";
+    } catch (const Error &e) {
+      failure = e.kind == ErrorKind::Check ? kExitCheck : kExitInput;
+      message = e.what();
+    } catch (const std::bad_alloc &) {
+      failure = kExitMemory;
+      message = "out of memory reading the input";
+    }
+  }
+  MPI_Bcast(&failure, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (failure) {
+    if (rank == 0)
+      std::cerr << "bisect: " << one_line(message) << "\n";
+    return failure;
+  }
+  int dim = mesh.dim;
+  MPI_Bcast(&dim, 1, MPI_INT, 0, MPI_COMM_WORLD);
+
+  try {
+    const std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
+    DistributedMesh d = distribute(mesh, 0, MPI_COMM_WORLD);
+    mesh = Mesh{};
+    // Each rank marks its cells as the serial coarsen marks them (a cell's
+    // mark depends on the cell alone).
+    std::vector<char> marks(d.local.num_cells(), 0);
+    if (a.all) {
+      std::fill(marks.begin(), marks.end(), 1);
+    } else if (!a.region.empty()) {
+      for (CellId c : select_cells(d.local, *read_region(a.region, dim)))
+        marks[c] = 1;
+    } else {
+      const std::vector<double> values = cell_indicator(d.local, a.indicator, a.input);
+      for (CellId c : mark_by_indicator(values, IndicatorRule::Below, a.below, a.input, &d.local))
+        marks[c] = 1;
+    }
+    CoarsenOptions options;
+    options.passes = a.passes;
+    options.sum_arrays = a.sums;
+    auto t_pass = std::chrono::steady_clock::now();
+    auto on_pass = [&](const CoarsenPass &p) {
+      if (!quiet) {
+        char buf[256];
+        std::snprintf(buf, sizeof buf, "pass %d%s: %s cells, %s %s removed, %.2f s\n", p.pass,
+                      a.passes ? ("/" + std::to_string(a.passes)).c_str() : "",
+                      with_commas(p.cells).c_str(), with_commas(p.removed_vertices).c_str(),
+                      p.removed_vertices == 1 ? "vertex" : "vertices", seconds_since(t_pass));
+        std::cerr << buf;
+      }
+      t_pass = std::chrono::steady_clock::now();
+    };
+    const CoarsenResult result = coarsen(d, marks, options, on_pass);
+
+    // The final check across the new parts, against the input's volume and
+    // boundary measure (coarsen() checked the whole mesh on rank 0 too).
+    if (pvtu) {
+      // Each part against itself as distributed, then the border between parts.
+      const Invariants part = measure_invariants(d.local, false);
+      const CheckResult check = check_refined(d, part, border_measure(d));
+      if (!check.ok) {
+        if (rank == 0)
+          std::cerr << "bisect: internal check failed after coarsening: " << one_line(check.failure)
+                    << "; no output written\n";
+        return kExitCheck;
+      }
+      write_pvtu(a.output, d, a.force);
+    }
+    Mesh g;
+    if (!pvtu)
+      g = gather(d, 0);
+    int bad = 0;
+    if (rank == 0) {
+      if (!pvtu) {
+        // The whole mesh: the serial coarsen's check (--check: the full one).
+        const CheckResult check =
+            a.check ? check_conformity(g, &original) : check_refined(g, original);
+        if (!check.ok) {
+          std::cerr << "bisect: internal check failed after coarsening: " << one_line(check.failure)
+                    << "; no output written\n";
+          bad = 1;
+        } else {
+          write_output_mesh(*outputs, h_mesh, g, WriteOptions{});
+        }
+      }
+      if (!bad)
+        outputs->commit();
+    }
+    MPI_Bcast(&bad, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    if (bad)
+      return kExitCheck;
+    const double total = seconds_since(t_start);
+    if (rank == 0 && a.json) {
+      nlohmann::json j;
+      j["input"] = a.input;
+      j["output"] = a.output;
+      j["dim"] = dim;
+      j["ranks"] = d.size;
+      j["passes"] = result.passes;
+      j["initial_cells"] = cells0;
+      j["initial_vertices"] = verts0;
+      j["cells"] = d.global_cells;
+      j["vertices"] = d.global_vertices;
+      j["removed_vertices"] = result.removed_vertices;
+      j["merged_pairs"] = result.merged_pairs;
+      j["seconds"] = total;
+      print_json(j);
+    }
+    if (!quiet)
+      std::cerr << "bisect: wrote " << a.output << " (" << with_commas(d.global_cells) << " cells"
+                << (pvtu ? ", " + std::to_string(d.size) + " pieces" : std::string()) << ", "
+                << with_commas(result.removed_vertices) << " vertices removed) in " << std::fixed
+                << std::setprecision(2) << total << " s\n";
+    return kExitOk;
+  } catch (const Error &e) {
+    // The distributed steps throw on every rank alike: rank 0 speaks for all.
+    if (rank == 0)
+      std::cerr << "bisect: " << one_line(e.what()) << "\n";
+    return e.kind == ErrorKind::Check   ? kExitCheck
+           : e.kind == ErrorKind::Limit ? kExitLimit
+                                        : kExitInput;
+  } catch (const std::exception &e) {
+    std::cerr << "bisect: rank " << rank << ": " << one_line(e.what()) << "\n";
+    MPI_Abort(MPI_COMM_WORLD, kExitCheck);
+  }
+  return kExitCheck;
+}
+
+} // namespace bisect::cli
