@@ -27,6 +27,10 @@ public:
   // drop cells here, e.g. the levelset indicator keeps the fraction where the
   // function curves most. The default keeps them all.
   virtual void filter(const Mesh &, std::vector<CellId> &) const {}
+  // Whether filter() ranks the selected cells against each other (so a part
+  // of a mesh alone would select differently from the whole): the levelset
+  // indicator. A distributed refine refuses such a region.
+  virtual bool filter_ranks_cells() const { return false; }
   // Whether touches() may run in several threads at once (select_cells then
   // splits the cells among them; the selection is the same either way). The
   // default is no, for regions that keep state or call back into Python.

@@ -314,6 +314,8 @@ public:
     }
   }
 
+  bool filter_ranks_cells() const override { return indicator_ != nullptr && fraction_ < 1; }
+
   void filter(const Mesh &mesh, std::vector<CellId> &selected) const override {
     if (!indicator_ || selected.empty())
       return;

@@ -214,6 +214,18 @@ for dim in 2 3 4; do
     /usr/bin/python3 "$same" sc.vtu dc.pvtu >same.txt || { cat same.txt >&2; fail "${dim}D coarsen --indicator on $p ranks differs"; }
   done
 done
+# A levelset region: without an indicator each part selects as the whole
+# mesh would; with one (a fraction ranked over the whole mesh) a distributed
+# run refuses it (exit 1) instead of selecting differently.
+echo '{"type": "levelset", "variables": ["x", "y", "z"], "expression": "x^2 + y^2 + z^2", "value": 0.3}' >ls.json
+"$BISECT" refine cube.vtu --region ls.json -n 4 -o s.vtu -q -f --quality-csv none
+expect_exit 0 run_mpi 3 refine cube.vtu --region ls.json -n 4 -o d.pvtu -q -f --quality-csv none
+/usr/bin/python3 "$same" s.vtu d.pvtu >same.txt || { cat same.txt >&2; fail "levelset region on 3 ranks differs"; }
+echo '{"type": "levelset", "variables": ["x", "y", "z"], "expression": "x^2 + y^2 + z^2", "value": 0.3, "indicator": {"type": "hessian", "fraction": 0.5}}' >lsi.json
+rm -f d.pvtu d_*.vtu
+expect_exit 1 run_mpi 2 refine cube.vtu --region lsi.json -n 2 -o d.pvtu -q -f --quality-csv none
+grep -q 'lsi.json: a levelset region with an indicator' "$WORK/err" || fail "levelset indicator under mpirun: no clear refusal"
+[[ ! -e d.pvtu ]] || fail "a refused refine wrote d.pvtu"
 # Options a distributed coarsen does not take, and a mesh without a tree.
 expect_exit 1 run_mpi 2 coarsen s.vtu --all --origin -o x.pvtu -q -f
 grep -q 'need a serial run' "$WORK/err" || fail "coarsen --origin under mpirun: no clear refusal"

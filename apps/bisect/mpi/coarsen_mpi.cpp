@@ -43,8 +43,11 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
       mesh = load_mesh(a.input, load_progress(a.input, quiet));
       if (!pvtu)
         check_output_format(a.output, mesh.dim);
-      if (!a.region.empty())
-        (void)read_region(a.region, mesh.dim);
+      if (!a.region.empty() && read_region(a.region, mesh.dim)->filter_ranks_cells())
+        throw UsageError(a.region + ": a levelset region with an indicator keeps a fraction of "
+                                    "the cells it selects, ranked over the whole mesh, which "
+                                    "the ranks' parts alone cannot do yet; coarsen without "
+                                    "mpirun (and without a .pvtu output)");
       if (!a.indicator.empty())
         (void)cell_indicator(mesh, a.indicator, a.input);
       // (The serial coarsen writes such a mesh unchanged.)
