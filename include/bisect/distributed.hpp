@@ -18,6 +18,7 @@
 #include "bisect/measure.hpp"
 #include "bisect/mesh.hpp"
 #include "bisect/refine.hpp"
+#include "bisect/region.hpp"
 
 #include <mpi.h>
 
@@ -96,6 +97,12 @@ struct DistributedRefineResult {
 // rank throw CheckError naming it.
 DistributedRefineResult refine(DistributedMesh &d, const std::vector<CellId> &selected,
                                const RefineLimits &limits = {});
+
+// select_cells (region.hpp) on every part, collective: the same cells the
+// whole mesh would select. A region whose filter ranks the cells (the
+// levelset indicator, Region::filter_ranks_cells) ranks them over all parts
+// (every rank receives the scores of all touched cells, 8 bytes each).
+std::vector<CellId> select_cells(const DistributedMesh &d, const Region &region);
 
 // refine_marked (driver.hpp) across ranks: each marked cell `depth`
 // generations down, then to conformity. Collective.

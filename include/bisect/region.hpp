@@ -29,8 +29,14 @@ public:
   virtual void filter(const Mesh &, std::vector<CellId> &) const {}
   // Whether filter() ranks the selected cells against each other (so a part
   // of a mesh alone would select differently from the whole): the levelset
-  // indicator. A distributed refine refuses such a region.
+  // indicator. Such a filter keeps the round(rank_fraction() n) cells (at
+  // least one) of the n selected with the largest rank_score(), ties going
+  // to the cell whose vertices' coordinates, sorted, come first
+  // (cell_coordinates_less), so that a distributed run, which ranks over all
+  // its parts (select_cells of distributed.hpp), keeps the same cells.
   virtual bool filter_ranks_cells() const { return false; }
+  virtual double rank_fraction() const { return 1; }
+  virtual double rank_score(const Mesh &, CellId) const { return 0; }
   // Whether touches() may run in several threads at once (select_cells then
   // splits the cells among them; the selection is the same either way). The
   // default is no, for regions that keep state or call back into Python.
@@ -46,6 +52,12 @@ std::unique_ptr<Region> read_region(const std::string &path, int dim);
 
 // The cells whose closed simplex touches the region, then region.filter().
 std::vector<CellId> select_cells(const Mesh &mesh, const Region &region);
+// The cells whose closed simplex touches the region, without the filter.
+std::vector<CellId> select_touching(const Mesh &mesh, const Region &region);
+// The order of cells by their vertices' coordinates: each cell's vertices
+// sorted lexicographically, then the two lists compared lexicographically
+// (the same for every numbering of the cells and vertices).
+bool cell_coordinates_less(const Mesh &mesh, CellId a, CellId b);
 
 // select_cells as a selector for run_iterations (driver.hpp); `region` must
 // outlive it.

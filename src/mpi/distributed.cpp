@@ -12,6 +12,7 @@
 #include "bisect/error.hpp"
 #include "bisect/output.hpp"
 #include "bisect/refine.hpp"
+#include "bisect/region.hpp"
 #include "bisect/state.hpp"
 #include "core/faces.hpp"
 
@@ -23,6 +24,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -1255,6 +1257,92 @@ bool rebalance(DistributedMesh &d, const Invariants &original, double tolerance)
   DistributedMesh fresh = distribute(whole, 0, comm);
   d = std::move(fresh);
   return true;
+}
+
+// ---------------------------------------------------------------- select
+
+std::vector<CellId> select_cells(const DistributedMesh &d, const Region &region) {
+  std::vector<CellId> touched = select_touching(d.local, region);
+  if (!region.filter_ranks_cells()) {
+    region.filter(d.local, touched);
+    return touched;
+  }
+  // Ranked over all parts: the round(fraction N) cells (at least one) of the
+  // N touched with the largest score, ties by their coordinates (Region).
+  MPI_Comm comm = d.comm.get();
+  const std::uint64_t mine = touched.size();
+  std::uint64_t total = 0;
+  MPI_Allreduce(&mine, &total, 1, MPI_UINT64_T, MPI_SUM, comm);
+  if (total == 0)
+    return touched;
+  const std::uint64_t keep = std::clamp<std::uint64_t>(
+      std::uint64_t(std::llround(region.rank_fraction() * double(total))), 1, total);
+  if (keep == total)
+    return touched;
+  std::vector<double> score(touched.size());
+  for (std::size_t j = 0; j < touched.size(); ++j)
+    score[j] = region.rank_score(d.local, touched[j]);
+  // Every rank's scores, to find the keep-th largest (8 bytes per touched
+  // cell on every rank).
+  std::vector<int> counts(std::size_t(d.size)), offsets(std::size_t(d.size) + 1, 0);
+  const int n = int(touched.size());
+  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
+  for (int r = 0; r < d.size; ++r)
+    offsets[std::size_t(r) + 1] = offsets[std::size_t(r)] + counts[std::size_t(r)];
+  std::vector<double> all(std::size_t(offsets.back()));
+  MPI_Allgatherv(score.data(), n, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE,
+                 comm);
+  std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(keep - 1), all.end(),
+                   std::greater<double>());
+  const double threshold = all[keep - 1];
+  const std::uint64_t above =
+      std::uint64_t(std::count_if(all.begin(), all.end(), [&](double x) { return x > threshold; }));
+  std::vector<CellId> kept;
+  std::vector<CellId> tied;
+  for (std::size_t j = 0; j < touched.size(); ++j) {
+    if (score[j] > threshold)
+      kept.push_back(touched[j]);
+    else if (score[j] == threshold)
+      tied.push_back(touched[j]);
+  }
+  // Of the cells tied at the threshold, the first keep - above by their
+  // sorted coordinates: every rank's tied cells, as coordinate lists.
+  const int k = d.local.dim * (d.local.dim + 1);
+  std::vector<double> keys;
+  for (CellId c : tied) {
+    std::vector<const double *> p;
+    for (int i = 0; i <= d.local.dim; ++i)
+      p.push_back(d.local.point(d.local.cell(c)[i]));
+    std::sort(p.begin(), p.end(), [&](const double *x, const double *y) {
+      return std::lexicographical_compare(x, x + d.local.dim, y, y + d.local.dim);
+    });
+    for (const double *x : p)
+      keys.insert(keys.end(), x, x + d.local.dim);
+  }
+  const int nk = int(keys.size());
+  MPI_Allgather(&nk, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
+  for (int r = 0; r < d.size; ++r)
+    offsets[std::size_t(r) + 1] = offsets[std::size_t(r)] + counts[std::size_t(r)];
+  std::vector<double> all_keys(std::size_t(offsets.back()));
+  MPI_Allgatherv(keys.data(), nk, MPI_DOUBLE, all_keys.data(), counts.data(), offsets.data(),
+                 MPI_DOUBLE, comm);
+  const std::size_t ties = all_keys.size() / std::size_t(k), wanted = keep - above;
+  std::vector<std::size_t> order(ties);
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  auto key_less = [&](const double *x, const double *y) {
+    return std::lexicographical_compare(x, x + k, y, y + k);
+  };
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return key_less(&all_keys[a * std::size_t(k)], &all_keys[b * std::size_t(k)]);
+  });
+  if (wanted > 0 && wanted <= ties) {
+    const double *last = &all_keys[order[wanted - 1] * std::size_t(k)];
+    for (std::size_t j = 0; j < tied.size(); ++j)
+      if (!key_less(last, &keys[j * std::size_t(k)])) // key <= the last one kept
+        kept.push_back(tied[j]);
+  }
+  std::sort(kept.begin(), kept.end());
+  return kept;
 }
 
 // ---------------------------------------------------------------- coarsen

@@ -315,6 +315,17 @@ public:
   }
 
   bool filter_ranks_cells() const override { return indicator_ != nullptr && fraction_ < 1; }
+  double rank_fraction() const override { return indicator_ ? fraction_ : 1.0; }
+  double rank_score(const Mesh &mesh, CellId c) const override {
+    if (!indicator_)
+      return 0;
+    const int dim = mesh.dim;
+    double verts[(kMaxDim + 1) * kMaxDim];
+    const VertexId *x = mesh.cell(c);
+    for (int i = 0; i <= dim; ++i)
+      std::copy(mesh.point(x[i]), mesh.point(x[i]) + dim, verts + i * dim);
+    return hessian_indicator(*indicator_, verts, dim);
+  }
 
   void filter(const Mesh &mesh, std::vector<CellId> &selected) const override {
     if (!indicator_ || selected.empty())
@@ -324,17 +335,14 @@ public:
         std::clamp<std::size_t>(std::size_t(std::llround(fraction_ * double(n))), 1, n);
     if (keep == n)
       return;
-    const int dim = mesh.dim;
     std::vector<std::pair<double, CellId>> ranked(n);
-    double verts[(kMaxDim + 1) * kMaxDim];
-    for (std::size_t j = 0; j < n; ++j) {
-      const VertexId *x = mesh.cell(selected[j]);
-      for (int i = 0; i <= dim; ++i)
-        std::copy(mesh.point(x[i]), mesh.point(x[i]) + dim, verts + i * dim);
-      ranked[j] = {hessian_indicator(*indicator_, verts, dim), selected[j]};
-    }
-    auto larger = [](const std::pair<double, CellId> &a, const std::pair<double, CellId> &b) {
-      return a.first > b.first || (a.first == b.first && a.second < b.second);
+    for (std::size_t j = 0; j < n; ++j)
+      ranked[j] = {rank_score(mesh, selected[j]), selected[j]};
+    // Ties by the cells' coordinates (cell_coordinates_less), not their ids:
+    // a distributed run keeps the same cells.
+    auto larger = [&](const std::pair<double, CellId> &a, const std::pair<double, CellId> &b) {
+      return a.first > b.first ||
+             (a.first == b.first && cell_coordinates_less(mesh, a.second, b.second));
     };
     std::nth_element(ranked.begin(), ranked.begin() + std::ptrdiff_t(keep), ranked.end(), larger);
     selected.resize(keep);

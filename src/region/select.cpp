@@ -3,10 +3,45 @@
 #include "bisect/threads.hpp"
 
 #include <algorithm>
+#include <array>
 
 namespace bisect {
 
 std::vector<CellId> select_cells(const Mesh &mesh, const Region &region) {
+  std::vector<CellId> out = select_touching(mesh, region);
+  region.filter(mesh, out); // e.g. the levelset indicator keeps a fraction
+  return out;
+}
+
+namespace {
+// A cell's vertices' coordinates, the vertices in lexicographic order.
+std::array<double, 20> sorted_coordinates(const Mesh &mesh, CellId c) {
+  const int dim = mesh.dim, n = dim + 1;
+  std::array<const double *, 5> p{};
+  for (int i = 0; i < n; ++i)
+    p[std::size_t(i)] = mesh.point(mesh.cell(c)[i]);
+  // (insertion sort: at most 5 entries)
+  for (int i = 1; i < n; ++i)
+    for (int j = i;
+         j > 0 && std::lexicographical_compare(p[std::size_t(j)], p[std::size_t(j)] + dim,
+                                               p[std::size_t(j - 1)], p[std::size_t(j - 1)] + dim);
+         --j)
+      std::swap(p[std::size_t(j)], p[std::size_t(j - 1)]);
+  std::array<double, 20> out{};
+  for (int i = 0; i < n; ++i)
+    std::copy_n(p[std::size_t(i)], dim, out.data() + i * dim);
+  return out;
+}
+} // namespace
+
+bool cell_coordinates_less(const Mesh &mesh, CellId a, CellId b) {
+  const std::size_t k = std::size_t(mesh.dim) * std::size_t(mesh.dim + 1);
+  const std::array<double, 20> x = sorted_coordinates(mesh, a), y = sorted_coordinates(mesh, b);
+  return std::lexicographical_compare(x.begin(), x.begin() + std::ptrdiff_t(k), y.begin(),
+                                      y.begin() + std::ptrdiff_t(k));
+}
+
+std::vector<CellId> select_touching(const Mesh &mesh, const Region &region) {
   const int dim = mesh.dim, nv = dim + 1;
   double lo[4], hi[4];
   region.bounds(lo, hi, dim);
@@ -49,7 +84,6 @@ std::vector<CellId> select_cells(const Mesh &mesh, const Region &region) {
     out.insert(out.end(), f.begin(), f.end());
     std::vector<CellId>().swap(f);
   }
-  region.filter(mesh, out); // e.g. the levelset indicator keeps a fraction
   return out;
 }
 

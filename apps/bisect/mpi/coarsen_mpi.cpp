@@ -43,11 +43,8 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
       mesh = load_mesh(a.input, load_progress(a.input, quiet));
       if (!pvtu)
         check_output_format(a.output, mesh.dim);
-      if (!a.region.empty() && read_region(a.region, mesh.dim)->filter_ranks_cells())
-        throw UsageError(a.region + ": a levelset region with an indicator keeps a fraction of "
-                                    "the cells it selects, ranked over the whole mesh, which "
-                                    "the ranks' parts alone cannot do yet; coarsen without "
-                                    "mpirun (and without a .pvtu output)");
+      if (!a.region.empty())
+        (void)read_region(a.region, mesh.dim);
       if (!a.indicator.empty())
         (void)cell_indicator(mesh, a.indicator, a.input);
       // (The serial coarsen writes such a mesh unchanged.)
@@ -86,7 +83,7 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
     if (a.all) {
       std::fill(marks.begin(), marks.end(), 1);
     } else if (!a.region.empty()) {
-      for (CellId c : select_cells(d.local, *read_region(a.region, dim)))
+      for (CellId c : select_cells(d, *read_region(a.region, dim)))
         marks[c] = 1;
     } else {
       const std::vector<double> values = cell_indicator(d.local, a.indicator, a.input);

@@ -131,11 +131,8 @@ int run_refine_mpi(const DistributedArgs &a) {
       mesh = load_for_refinement(a.input, a.marking, quiet);
       if (!pvtu)
         check_output_format(a.output, mesh.dim);
-      if (!a.region.empty() && read_region(a.region, mesh.dim)->filter_ranks_cells())
-        throw UsageError(a.region + ": a levelset region with an indicator keeps a fraction of "
-                                    "the cells it selects, ranked over the whole mesh, which "
-                                    "the ranks' parts alone cannot do yet; refine it without "
-                                    "mpirun (and without a .pvtu output)");
+      if (!a.region.empty())
+        (void)read_region(a.region, mesh.dim);
       original = measure_invariants(mesh, false);
       if (!a.indicator.empty()) {
         // The indicator marks the input's cells (one iteration): the marks
@@ -206,7 +203,7 @@ int run_refine_mpi(const DistributedArgs &a) {
       const auto t0 = std::chrono::steady_clock::now();
       std::vector<CellId> selected;
       if (region)
-        selected = select_cells(d.local, *region);
+        selected = select_cells(d, *region);
       for (auto f = d.local.cell_data.begin(); f != d.local.cell_data.end(); ++f)
         if (f->name == kMarkedArray) {
           std::vector<CellId> by_indicator, both;
