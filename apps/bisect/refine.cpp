@@ -72,13 +72,12 @@ int run_refine(const RefineArgs &a) {
 #ifdef BISECT_MPI
   // Under mpirun, or for a .pvtu: the distributed refine (README, "MPI").
   if (mpi_world_size() > 1 || a.output.ends_with(".pvtu")) {
-    if (a.max_elements || a.max_memory_gib || !a.slices.empty() || a.check || a.output == "-" ||
-        !a.format.empty() || a.origin)
+    if (!a.slices.empty() || a.check || a.output == "-" || !a.format.empty() || a.origin)
       throw UsageError("distributed refine (mpirun or a .pvtu output) takes --region, "
                        "--indicator with its rule, --depth, --iterations, --marking, "
-                       "--compression, --quality-csv, --force, --quiet and --json; "
-                       "--max-elements, --max-memory, --slices, --check, --origin, --format "
-                       "and -o - need a serial run");
+                       "--max-elements, --max-memory, --compression, --quality-csv, --force, "
+                       "--quiet and --json; --slices, --check, --origin, --format and -o - "
+                       "need a serial run");
     if (a.output.empty())
       throw UsageError("distributed refine needs -o (a .pvtu, or a .vtu/.msh to gather into)");
     DistributedArgs d;
@@ -94,6 +93,8 @@ int run_refine(const RefineArgs &a) {
                          : IndicatorRule::Dorfler);
     d.parameter = a.above ? *a.above : a.top ? *a.top : a.dorfler ? *a.dorfler : 0.0;
     d.marking = marking;
+    d.max_elements = std::size_t(a.max_elements);
+    d.max_memory_gib = a.max_memory_gib;
     d.compression = a.compression == "lz4"    ? Compression::Lz4
                     : a.compression == "none" ? Compression::None
                                               : Compression::Zlib;
@@ -359,7 +360,7 @@ Command add_refine(CLI::App &app) {
       ->check(CLI::Range(std::int64_t(1), std::int64_t(kNoCell) - 1));
   cmd->add_option("--max-memory", a->max_memory_gib,
                   "Stop (exit 3) before an iteration estimated to need more than this many "
-                  "GiB; default: the memory available now")
+                  "GiB (under mpirun: per rank); default: the memory available now")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--slices", a->slices,
                   "Also write the sections t = T1,T2,... of the final mesh (t: the last "

@@ -112,6 +112,21 @@ for dim in 2 3; do
   grep -q 'stopping before iteration' "$WORK/err" || { cat "$WORK/err" >&2; fail "${dim}D: no stop line"; }
   /usr/bin/python3 "$same" ps.vtu pd.pvtu >same.txt || { cat same.txt >&2; fail "${dim}D: the mesh at the precision limit differs"; }
 done
+# --max-elements: the iteration that passes it (over all ranks) is undone on
+# every rank; exit 3 with the serial run's mesh. --max-memory bounds each
+# rank's estimate (exit 3, the mesh before that iteration written).
+expect_exit 3 "$BISECT" refine hypercube.vtu --region "$R/moving-sphere.json" -n 12 --max-elements 5000 \
+  -o s.vtu -q -f --quality-csv none
+expect_exit 3 run_mpi 3 refine hypercube.vtu --region "$R/moving-sphere.json" -n 12 --max-elements 5000 \
+  -o d.pvtu -f --quality-csv none
+grep -q 'stopping before iteration 11: it would pass --max-elements 5,000' "$WORK/err" ||
+  { cat "$WORK/err" >&2; fail "--max-elements under mpirun: no stop line"; }
+/usr/bin/python3 "$same" s.vtu d.pvtu >same.txt || { cat same.txt >&2; fail "the mesh at --max-elements differs"; }
+expect_exit 3 run_mpi 2 refine hypercube.vtu --region "$R/moving-sphere.json" -n 12 --max-memory 0.00001 \
+  -o d.pvtu -f --quality-csv none
+grep -q 'stopping before iteration [0-9]*: rank [01]: it would need about' "$WORK/err" ||
+  { cat "$WORK/err" >&2; fail "--max-memory under mpirun: no stop line"; }
+[[ -e d.pvtu ]] || fail "--max-memory under mpirun wrote no mesh"
 # Parts that grow unequal are made again (rebalance): the moving sphere
 # refines one end of the hypercube first.
 expect_exit 0 run_mpi 2 refine hypercube.vtu --region "$R/moving-sphere.json" -n 12 -o r.pvtu -q -f \

@@ -5,6 +5,7 @@
 #include "cli.hpp"
 
 #include "bisect/distributed.hpp"
+#include "bisect/driver.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/threads.hpp"
 
@@ -15,6 +16,7 @@
 #include <iomanip>
 #include <iostream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 
 namespace bisect::cli {
@@ -41,6 +43,29 @@ bool near_precision_limit(const Mesh &m, const std::vector<CellId> &selected) {
       }
   }
   return false;
+}
+
+// The ranks of this job on this machine (they share its memory).
+int local_ranks() {
+  if (const char *local = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE"))
+    return std::max(1, std::atoi(local));
+  return 1;
+}
+
+// The message of the lowest rank whose `mine` is not empty, on every rank
+// (empty when none is). Collective on MPI_COMM_WORLD.
+std::string first_failing_rank(const std::string &mine, int rank) {
+  int me = mine.empty() ? std::numeric_limits<int>::max() : rank, lowest = 0;
+  MPI_Allreduce(&me, &lowest, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  if (lowest == std::numeric_limits<int>::max())
+    return {};
+  std::uint64_t n = mine.size();
+  MPI_Bcast(&n, 1, MPI_UINT64_T, lowest, MPI_COMM_WORLD);
+  std::string text(n, ' ');
+  if (rank == lowest)
+    text = mine;
+  MPI_Bcast(text.data(), int(n), MPI_CHAR, lowest, MPI_COMM_WORLD);
+  return "rank " + std::to_string(lowest) + ": " + text;
 }
 
 // The cells an indicator marked, while they travel to their parts.
@@ -216,10 +241,25 @@ int run_refine_mpi(const DistributedArgs &a) {
           d.local.cell_data.erase(f);
           break;
         }
+      // The memory estimate of the serial refine (driver.hpp), each rank for
+      // its part: with --max-memory against that bound, else against the
+      // memory available now, which the ranks on this machine share.
+      {
+        const std::string why =
+            a.max_memory_gib > 0
+                ? memory_shortfall(d.local, selected.size(), a.max_memory_gib)
+                : memory_shortfall(d.local, selected.size() * std::size_t(local_ranks()), 0);
+        const std::string first = first_failing_rank(why, rank);
+        if (!first.empty()) {
+          stop_message = "stopping before iteration " + std::to_string(it) + ": " + first;
+          break;
+        }
+      }
       // Near the precision limit (a selected cell's edge within 2^10 of it:
       // closure bisects cells about as coarse), every rank keeps its part as
-      // it is, so that passing the limit anywhere undoes the iteration.
-      const bool near = near_precision_limit(d.local, selected);
+      // it is, so that passing the limit anywhere undoes the iteration; so
+      // with --max-elements, to go back when the iteration passes it.
+      const bool near = near_precision_limit(d.local, selected) || a.max_elements > 0;
       int any_near = near, keep = 0;
       MPI_Allreduce(&any_near, &keep, 1, MPI_INT, MPI_LOR, MPI_COMM_WORLD);
       std::unique_ptr<Mesh> kept_part;
@@ -248,6 +288,16 @@ int run_refine_mpi(const DistributedArgs &a) {
                        "2^-40 of its coordinates' magnitude, or below 2^-100); writing the "
                        "mesh after iteration " +
                        std::to_string(it - 1);
+        break;
+      }
+      if (a.max_elements > 0 && d.global_cells > a.max_elements) {
+        const std::size_t passed = d.global_cells;
+        d.local = std::move(*kept_part);
+        d.sharers = std::move(kept_sharers);
+        count_global(d);
+        stop_message = "stopping before iteration " + std::to_string(it) + ": it would pass " +
+                       "--max-elements " + with_commas(a.max_elements) + " (" +
+                       with_commas(passed) + " cells; " + with_commas(d.global_cells) + " now)";
         break;
       }
       if (r.selected == 0) {

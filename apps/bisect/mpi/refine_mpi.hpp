@@ -18,6 +18,8 @@ struct DistributedArgs {
   int rule = 0; // IndicatorRule
   double parameter = 0;
   std::optional<Marking> marking;
+  std::size_t max_elements = 0; // 0: none
+  double max_memory_gib = 0;    // per rank; 0: the memory available, shared by the local ranks
   Compression compression = Compression::Zlib;
   bool force = false, quiet = false, json = false;
 };
