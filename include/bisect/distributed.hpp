@@ -62,10 +62,13 @@ struct DistributedMesh {
   // superset: a vertex made on an edge gets the ranks both ends have.
   std::vector<std::vector<int>> sharers;
   std::vector<int> neighbours; // sorted: every rank in some sharers list
-  // When the input had a tree: per input vertex of `local`, the coordinates
-  // of the two ends of its parent edge, 2 dim doubles (NaN for an original
-  // vertex), which the tree of a .pvtu's pieces names (write_pvtu).
-  std::vector<double> input_parent_points;
+  // When the input had a tree: for the first parent_points.size() / (2 dim)
+  // vertices of `local` (those it had when the part was made or last
+  // migrated), the coordinates of the two ends of their parent edge, 2 dim
+  // doubles each (NaN for an original vertex): a part may lack a vertex's
+  // parents, and these name them, for the tree of a .pvtu's pieces
+  // (write_pvtu) and for gather().
+  std::vector<double> parent_points;
   // On the root, when the input had a tree: its parent_edge and level.
   std::vector<VertexId> input_parent_edge;
   std::vector<std::uint16_t> input_level;
@@ -139,15 +142,18 @@ Mesh gather(const DistributedMesh &d, int root);
 // The largest part's cells over the mean (1: balanced). Collective.
 double imbalance(const DistributedMesh &d);
 // When the largest part exceeds the mean by more than `tolerance` (0.1:
-// 10%), makes the parts again along the Hilbert curve through the cells as
-// they are now, with their state, tree, tags and data; returns whether it
-// did. Collective. The cells move through the root (gather, then
-// distribute): simple and exact, but the root holds the whole mesh while it
-// runs; there it passes check_refined against `original` (the input's
-// invariants) first, else CheckError on every rank. The parts' own
-// invariants and border_measure() must then be taken again. Explicit
-// marking keeps its parts (its edge ranks do not travel).
-bool rebalance(DistributedMesh &d, const Invariants &original, double tolerance = 0.1);
+// 10%), makes the parts again along the Hilbert curve through all parts'
+// cells as they are now (equal stretches, splitters found with all-reduces)
+// and migrates the cells there, rank to rank, with their state, tree, tags
+// and data; who shares which vertex is found again through a directory (each
+// vertex at a home rank its coordinates hash to). Returns whether it did.
+// Collective. No rank holds more than its part. The parts pass
+// check_refined(d, part_original, border_original) first, else CheckError
+// on every rank; the parts' own invariants and border_measure() must then be
+// taken again. Explicit marking keeps its parts (its edge ranks do not
+// travel).
+bool rebalance(DistributedMesh &d, const Invariants &part_original, double border_original,
+               double tolerance = 0.1);
 
 // coarsen() (coarsen.hpp) across ranks: `marks` has one entry per cell of
 // d.local (non-zero: may be merged away). Collective. The passes run on the

@@ -597,7 +597,7 @@ DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
     m.generation = r.get_vector<std::uint16_t>();
     m.parent_edge = r.get_vector<VertexId>();
     m.level = r.get_vector<std::uint16_t>();
-    d.input_parent_points = r.get_vector<double>();
+    d.parent_points = r.get_vector<double>();
   }
   m.entities.resize(r.get<std::uint64_t>());
   for (Entities &block : m.entities) {
@@ -919,6 +919,7 @@ Mesh gather(const DistributedMesh &d, int root) {
     w.put(m.generation);
     w.put(m.parent_edge);
     w.put(m.level);
+    w.put(d.parent_points);
   }
   if (d.rank != root) {
     send_bytes(w.bytes, root, d.comm.get());
@@ -939,6 +940,7 @@ Mesh gather(const DistributedMesh &d, int root) {
     std::vector<Entities> entities;
     std::vector<std::uint16_t> generation, level;
     std::vector<VertexId> parent_edge;
+    std::vector<double> parent_points;
   };
   std::vector<Part> parts(std::size_t(d.size));
   for (int p = 0; p < d.size; ++p) {
@@ -962,6 +964,7 @@ Mesh gather(const DistributedMesh &d, int root) {
       part.generation = r.get_vector<std::uint16_t>();
       part.parent_edge = r.get_vector<VertexId>();
       part.level = r.get_vector<std::uint16_t>();
+      part.parent_points = r.get_vector<double>();
     }
   }
   // Input vertices first, at their input ids (every input vertex is in some
@@ -1004,11 +1007,33 @@ Mesh gather(const DistributedMesh &d, int root) {
   const bool tree = !parts[0].parent_edge.empty();
   std::vector<std::uint16_t> level_of(unique.size(), 1);
   std::vector<int> height(unique.size(), tree ? -1 : 0);
+  // A made vertex's parents by their coordinates: the part's own where it
+  // holds them, else those it was told (parent_points: after a migration a
+  // part may lack them); NaN when none is known.
+  const std::size_t pw = 2 * std::size_t(dim);
+  auto parent_point = [&](int p, VertexId v, int k) -> const double * {
+    const Part &part = parts[std::size_t(p)];
+    const VertexId a = part.parent_edge[2 * std::size_t(v) + std::size_t(k)];
+    if (a != kNoVertex)
+      return part.coords.data() + std::size_t(a) * std::size_t(dim);
+    if ((std::size_t(v) + 1) * pw <= part.parent_points.size() &&
+        !std::isnan(part.parent_points[std::size_t(v) * pw]))
+      return part.parent_points.data() + std::size_t(v) * pw + std::size_t(k * dim);
+    return nullptr;
+  };
+  // The made vertex (index in `unique`, sorted by coordinates) at p, or none.
+  auto unique_at = [&](const double *p) -> VertexId {
+    auto it =
+        std::lower_bound(unique.begin(), unique.end(), p, [&](const Made &x, const double *q) {
+          return std::lexicographical_compare(point(x), point(x) + dim, q, q + dim);
+        });
+    if (it == unique.end() || !std::equal(p, p + dim, point(*it)))
+      return kNoVertex;
+    return VertexId(it - unique.begin());
+  };
   auto parent_unique = [&](const Made &x, int k) -> VertexId {
-    const Part &part = parts[std::size_t(x.part)];
-    const VertexId a = part.parent_edge[2 * std::size_t(x.v) + std::size_t(k)];
-    return a == kNoVertex || a < part.input_vertex.size() ? kNoVertex
-                                                          : unique_of[std::size_t(x.part)][a];
+    const double *p = parent_point(x.part, x.v, k);
+    return p ? unique_at(p) : kNoVertex;
   };
   if (tree) {
     for (std::size_t u = 0; u < unique.size(); ++u)
@@ -1072,17 +1097,7 @@ Mesh gather(const DistributedMesh &d, int root) {
       g.parent_edge[2 * v + 1] = d.input_parent_edge[2 * v + 1];
       g.level[v] = d.input_level[v];
     }
-    for (std::size_t v = inputs; v < source.size(); ++v) {
-      const Part &part = parts[std::size_t(source[v].first)];
-      for (int k = 0; k < 2; ++k)
-        g.parent_edge[2 * v + std::size_t(k)] =
-            id_in_g[std::size_t(source[v].first)]
-                   [part.parent_edge[2 * std::size_t(source[v].second) + std::size_t(k)]];
-      g.level[v] = part.level[source[v].second];
-      // Parts may have made it from either end first: smaller id first.
-      if (g.parent_edge[2 * v] > g.parent_edge[2 * v + 1])
-        std::swap(g.parent_edge[2 * v], g.parent_edge[2 * v + 1]);
-    }
+    // (resolved once the coordinates are in g, below)
   }
   g.coords.resize(source.size() * std::size_t(dim), 0.0);
   for (std::size_t v = 0; v < source.size(); ++v)
@@ -1091,6 +1106,27 @@ Mesh gather(const DistributedMesh &d, int root) {
       std::copy_n(part.coords.data() + std::size_t(source[v].second) * dim, dim,
                   g.coords.data() + v * std::size_t(dim));
     }
+  if (tree) {
+    // Made vertices' parents by coordinates, among g's vertices.
+    PointIndex at(g.coords, dim);
+    for (std::size_t v = 0; v < source.size(); ++v)
+      if (source[v].first >= 0)
+        at.add(VertexId(v));
+    for (std::size_t v = inputs; v < source.size(); ++v) {
+      const auto [p, lv] = source[v];
+      g.level[v] = parts[std::size_t(p)].level[lv];
+      for (int k = 0; k < 2; ++k) {
+        const double *q = parent_point(p, lv, k);
+        const VertexId e = q ? at.find(q) : kNoVertex;
+        if (e == kNoVertex)
+          throw CheckError("gather: the parents of a vertex made by bisection are in no part");
+        g.parent_edge[2 * v + std::size_t(k)] = e;
+      }
+      // Parts may have made it from either end first: smaller id first.
+      if (g.parent_edge[2 * v] > g.parent_edge[2 * v + 1])
+        std::swap(g.parent_edge[2 * v], g.parent_edge[2 * v + 1]);
+    }
+  }
   for (std::size_t a = 0; a < m.point_data.size(); ++a) {
     DataArray out = parts[0].point_data[a];
     const std::size_t k = std::size_t(out.components);
@@ -1238,24 +1274,503 @@ double imbalance(const DistributedMesh &d) {
   return total ? double(largest) * double(d.size) / double(total) : 1.0;
 }
 
-bool rebalance(DistributedMesh &d, const Invariants &original, double tolerance) {
+namespace {
+
+// The Hilbert key of each cell's centroid in the bounding box of all parts.
+std::vector<std::uint64_t> hilbert_keys(const DistributedMesh &d) {
+  const Mesh &m = d.local;
+  const int dim = m.dim, bits = std::min(21, 64 / dim);
+  std::vector<double> lo(std::size_t(dim), std::numeric_limits<double>::infinity()),
+      hi(std::size_t(dim), -std::numeric_limits<double>::infinity());
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    for (int k = 0; k < dim; ++k) {
+      lo[std::size_t(k)] = std::min(lo[std::size_t(k)], m.point(VertexId(v))[k]);
+      hi[std::size_t(k)] = std::max(hi[std::size_t(k)], m.point(VertexId(v))[k]);
+    }
+  MPI_Allreduce(MPI_IN_PLACE, lo.data(), dim, MPI_DOUBLE, MPI_MIN, d.comm.get());
+  MPI_Allreduce(MPI_IN_PLACE, hi.data(), dim, MPI_DOUBLE, MPI_MAX, d.comm.get());
+  const double scale = double((std::uint64_t(1) << bits) - 1);
+  std::vector<std::uint64_t> keys(m.num_cells());
+  for (std::size_t c = 0; c < keys.size(); ++c) {
+    std::uint32_t x[4];
+    for (int k = 0; k < dim; ++k) {
+      double sum = 0;
+      for (int i = 0; i <= dim; ++i)
+        sum += m.point(m.cell(CellId(c))[i])[k];
+      const double ext = hi[std::size_t(k)] - lo[std::size_t(k)];
+      const double u = ext > 0 ? (sum / (dim + 1) - lo[std::size_t(k)]) / ext : 0.0;
+      x[k] = std::uint32_t(std::clamp(u, 0.0, 1.0) * scale);
+    }
+    keys[c] = hilbert_index(x, dim, bits);
+  }
+  return keys;
+}
+
+// The rank each cell goes to: equal stretches of all parts' cells along the
+// curve, ties by rank and cell id (so stretches are exact even where many
+// centroids share a key). Splitters by bisection of the (key, rank, cell)
+// range, counting below each with an all-reduce (128 rounds of P - 1
+// counts).
+std::vector<int> hilbert_destinations(const DistributedMesh &d) {
+  using Key = unsigned __int128;
+  const std::vector<std::uint64_t> hk = hilbert_keys(d);
+  std::vector<Key> keys(hk.size());
+  for (std::size_t c = 0; c < hk.size(); ++c)
+    keys[c] = Key(hk[c]) << 64 | Key(std::uint64_t(d.rank) << 40 | std::uint64_t(c));
+  std::vector<Key> sorted = keys;
+  std::sort(sorted.begin(), sorted.end());
+  const std::size_t splits = std::size_t(d.size) - 1;
+  std::uint64_t total = sorted.size();
+  MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPI_UINT64_T, MPI_SUM, d.comm.get());
+  // lo[s]: the smallest key with at least target(s) keys below it.
+  std::vector<Key> lo(splits, 0), hi(splits, ~Key(0));
+  std::vector<std::uint64_t> below(splits);
+  for (int round = 0; round < 129; ++round) {
+    for (std::size_t s = 0; s < splits; ++s) {
+      const Key mid = lo[s] + (hi[s] - lo[s]) / 2;
+      below[s] =
+          std::uint64_t(std::lower_bound(sorted.begin(), sorted.end(), mid) - sorted.begin());
+    }
+    MPI_Allreduce(MPI_IN_PLACE, below.data(), int(splits), MPI_UINT64_T, MPI_SUM, d.comm.get());
+    for (std::size_t s = 0; s < splits; ++s) {
+      const Key mid = lo[s] + (hi[s] - lo[s]) / 2;
+      const std::uint64_t target = total * (s + 1) / std::uint64_t(d.size);
+      if (below[s] >= target)
+        hi[s] = mid;
+      else
+        lo[s] = mid + (mid < hi[s]);
+    }
+  }
+  std::vector<int> dest(keys.size());
+  for (std::size_t c = 0; c < keys.size(); ++c)
+    dest[c] = int(std::upper_bound(lo.begin(), lo.end(), keys[c]) - lo.begin());
+  return dest;
+}
+
+// Moves each local cell c to rank dest[c], with its vertices, bisection
+// state, tree, tags and data; the parts' vertices are known by their
+// coordinates, and who shares which is found again through a directory:
+// each vertex has a home rank (a hash of its coordinates) that hears from
+// every rank holding it and tells each of them the others. Collective.
+void migrate(DistributedMesh &d, const std::vector<int> &dest) {
+  const Mesh &m = d.local;
+  const int dim = m.dim, n = m.cell_size(), P = d.size;
+  const std::size_t np = static_cast<std::size_t>(P);
+  const std::size_t pw = 2 * std::size_t(dim);
+  const bool tree = m.has_tree();
+  const std::size_t nv = m.num_vertices();
+  MPI_Comm comm = d.comm.get();
+  // Each vertex's parents by coordinates (NaN: none known).
+  auto parents_of = [&](VertexId v, double *out) {
+    std::fill(out, out + pw, std::numeric_limits<double>::quiet_NaN());
+    if (!tree)
+      return;
+    const VertexId a = m.parent_edge[2 * std::size_t(v)], b = m.parent_edge[2 * std::size_t(v) + 1];
+    if (a != kNoVertex) {
+      std::copy_n(m.point(a), dim, out);
+      std::copy_n(m.point(b), dim, out + dim);
+    } else if ((std::size_t(v) + 1) * pw <= d.parent_points.size()) {
+      std::copy_n(d.parent_points.data() + std::size_t(v) * pw, pw, out);
+    }
+  };
+  std::vector<std::unordered_multimap<FaceKey, std::uint64_t, FaceKeyHash>> entity_index(
+      m.entities.size());
+  for (std::size_t b = 0; b < m.entities.size(); ++b)
+    for (std::size_t i = 0; i < m.entities[b].size(); ++i)
+      entity_index[b].emplace(face_key(m.entities[b].entity(i), m.entities[b].dim + 1), i);
+  std::vector<std::vector<std::uint64_t>> cells_to(np);
+  for (std::size_t c = 0; c < dest.size(); ++c)
+    cells_to[std::size_t(dest[c])].push_back(c);
+  std::vector<VertexId> local_id(nv, kNoVertex);
+  std::vector<char> sendbuf;
+  std::vector<long long> send_counts(np), send_displs(np);
+  for (int r = 0; r < P; ++r) {
+    const std::vector<std::uint64_t> &cells = cells_to[std::size_t(r)];
+    std::vector<std::uint64_t> verts;
+    for (std::uint64_t c : cells)
+      for (int i = 0; i < n; ++i)
+        verts.push_back(m.cell(CellId(c))[i]);
+    std::sort(verts.begin(), verts.end());
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    for (std::size_t i = 0; i < verts.size(); ++i)
+      local_id[verts[i]] = VertexId(i);
+    Writer w;
+    std::vector<double> coords, parents(verts.size() * pw);
+    std::vector<std::uint64_t> ids;
+    std::vector<std::uint16_t> level;
+    for (std::size_t i = 0; i < verts.size(); ++i) {
+      const VertexId v = VertexId(verts[i]);
+      coords.insert(coords.end(), m.point(v), m.point(v) + dim);
+      ids.push_back(v < d.input_vertex.size() ? d.input_vertex[v] : ~std::uint64_t(0));
+      level.push_back(tree && m.level.size() == nv ? m.level[v] : std::uint16_t(0));
+      parents_of(v, parents.data() + i * pw);
+    }
+    w.put(coords);
+    w.put(ids);
+    w.put(level);
+    w.put(parents);
+    put_arrays(w, m.point_data, verts);
+    std::vector<VertexId> conn;
+    std::vector<std::uint8_t> stage, tag;
+    std::vector<std::uint16_t> generation;
+    for (std::uint64_t c : cells) {
+      for (int i = 0; i < n; ++i)
+        conn.push_back(local_id[m.cell(CellId(c))[i]]);
+      stage.push_back(std::uint8_t(m.stage[c]));
+      tag.push_back(m.tag[c]);
+      generation.push_back(tree ? m.generation[c] : std::uint16_t(0));
+    }
+    w.put(conn);
+    w.put(stage);
+    w.put(tag);
+    w.put(generation);
+    put_arrays(w, m.cell_data, cells);
+    for (std::size_t b = 0; b < m.entities.size(); ++b) {
+      const Entities &block = m.entities[b];
+      std::vector<std::uint64_t> taken;
+      for (std::uint64_t c : cells)
+        for_each_face(m.cell(CellId(c)), n, block.dim, [&](const VertexId *f, int count) {
+          auto [first, last] = entity_index[b].equal_range(face_key(f, count));
+          for (auto it = first; it != last; ++it)
+            taken.push_back(it->second);
+        });
+      std::sort(taken.begin(), taken.end());
+      taken.erase(std::unique(taken.begin(), taken.end()), taken.end());
+      std::vector<VertexId> evs;
+      for (std::uint64_t i : taken)
+        for (int k = 0; k <= block.dim; ++k)
+          evs.push_back(local_id[block.entity(i)[k]]);
+      w.put(evs);
+      put_arrays(w, block.data, taken);
+    }
+    for (std::uint64_t v : verts)
+      local_id[v] = kNoVertex;
+    send_displs[std::size_t(r)] = (long long)sendbuf.size();
+    send_counts[std::size_t(r)] = (long long)w.bytes.size();
+    sendbuf.insert(sendbuf.end(), w.bytes.begin(), w.bytes.end());
+  }
+  // The messages: sizes, then bytes (point to point, any size).
+  std::vector<long long> recv_counts(np);
+  MPI_Alltoall(send_counts.data(), 1, MPI_LONG_LONG, recv_counts.data(), 1, MPI_LONG_LONG, comm);
+  std::vector<std::vector<char>> in(np);
+  {
+    std::vector<MPI_Request> requests;
+    for (int r = 0; r < P; ++r) {
+      in[std::size_t(r)].resize(std::size_t(recv_counts[std::size_t(r)]));
+      for (std::size_t at = 0; at < in[std::size_t(r)].size(); at += kChunk) {
+        requests.emplace_back();
+        MPI_Irecv(in[std::size_t(r)].data() + at,
+                  int(std::min(kChunk, in[std::size_t(r)].size() - at)), MPI_CHAR, r, 3, comm,
+                  &requests.back());
+      }
+    }
+    for (int r = 0; r < P; ++r)
+      for (std::size_t at = 0; at < std::size_t(send_counts[std::size_t(r)]); at += kChunk) {
+        requests.emplace_back();
+        MPI_Isend(sendbuf.data() + send_displs[std::size_t(r)] + at,
+                  int(std::min(kChunk, std::size_t(send_counts[std::size_t(r)]) - at)), MPI_CHAR, r,
+                  3, comm, &requests.back());
+      }
+    MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  }
+  std::vector<char>().swap(sendbuf);
+
+  // The new part: vertices merged by coordinates.
+  Mesh out;
+  out.dim = dim;
+  out.marking = m.marking;
+  out.physical_names = m.physical_names;
+  for (const DataArray &a : m.point_data)
+    out.point_data.push_back({a.name, a.components, {}, a.type});
+  for (const DataArray &a : m.cell_data)
+    out.cell_data.push_back({a.name, a.components, {}, a.type});
+  std::vector<double> coords;
+  std::vector<std::uint64_t> ids;
+  std::vector<std::uint16_t> level;
+  std::vector<double> parents;
+  PointIndex index(coords, dim);
+  std::vector<Entities> entities(m.entities.size());
+  std::vector<std::unordered_map<FaceKey, int, FaceKeyHash>> entity_from(m.entities.size());
+  for (std::size_t b = 0; b < m.entities.size(); ++b) {
+    entities[b].dim = m.entities[b].dim;
+    for (const DataArray &a : m.entities[b].data)
+      entities[b].data.push_back({a.name, a.components, {}, a.type});
+  }
+  for (int r = 0; r < P; ++r) {
+    Reader rd(in[std::size_t(r)]);
+    const std::vector<double> c = rd.get_vector<double>();
+    const std::vector<std::uint64_t> id = rd.get_vector<std::uint64_t>();
+    const std::vector<std::uint16_t> lv = rd.get_vector<std::uint16_t>();
+    const std::vector<double> pa = rd.get_vector<double>();
+    const std::vector<DataArray> pd = get_arrays(rd);
+    std::vector<VertexId> to(id.size());
+    for (std::size_t i = 0; i < id.size(); ++i) {
+      const VertexId v = VertexId(coords.size() / std::size_t(dim));
+      coords.insert(coords.end(), c.begin() + std::ptrdiff_t(i * dim),
+                    c.begin() + std::ptrdiff_t((i + 1) * dim));
+      const VertexId w = index.add(v);
+      to[i] = w;
+      if (w != v) {
+        coords.resize(coords.size() - std::size_t(dim));
+        continue;
+      }
+      ids.push_back(id[i]);
+      level.push_back(lv[i]);
+      parents.insert(parents.end(), pa.begin() + std::ptrdiff_t(i * pw),
+                     pa.begin() + std::ptrdiff_t((i + 1) * pw));
+      for (std::size_t a = 0; a < pd.size(); ++a) {
+        const std::size_t k = std::size_t(pd[a].components);
+        out.point_data[a].values.insert(out.point_data[a].values.end(),
+                                        pd[a].values.begin() + std::ptrdiff_t(i * k),
+                                        pd[a].values.begin() + std::ptrdiff_t((i + 1) * k));
+      }
+    }
+    for (VertexId x : rd.get_vector<VertexId>())
+      out.cells.push_back(to[x]);
+    for (std::uint8_t st : rd.get_vector<std::uint8_t>())
+      out.stage.push_back(Stage(st));
+    const std::vector<std::uint8_t> tg = rd.get_vector<std::uint8_t>();
+    out.tag.insert(out.tag.end(), tg.begin(), tg.end());
+    const std::vector<std::uint16_t> gen = rd.get_vector<std::uint16_t>();
+    out.generation.insert(out.generation.end(), gen.begin(), gen.end());
+    const std::vector<DataArray> cd = get_arrays(rd);
+    for (std::size_t a = 0; a < cd.size(); ++a)
+      out.cell_data[a].values.insert(out.cell_data[a].values.end(), cd[a].values.begin(),
+                                     cd[a].values.end());
+    for (std::size_t b = 0; b < m.entities.size(); ++b) {
+      const std::vector<VertexId> evs = rd.get_vector<VertexId>();
+      const std::vector<DataArray> ed = get_arrays(rd);
+      const int k = entities[b].dim + 1;
+      for (std::size_t i = 0; i * std::size_t(k) < evs.size(); ++i) {
+        VertexId f[4];
+        for (int j = 0; j < k; ++j)
+          f[j] = to[evs[i * std::size_t(k) + std::size_t(j)]];
+        // An entity on the border of two senders comes from both: the
+        // first sender's copies are kept.
+        const int from = entity_from[b].emplace(face_key(f, k), r).first->second;
+        if (from != r)
+          continue;
+        entities[b].vertices.insert(entities[b].vertices.end(), f, f + k);
+        for (std::size_t a = 0; a < ed.size(); ++a) {
+          const std::size_t w = std::size_t(ed[a].components);
+          entities[b].data[a].values.insert(entities[b].data[a].values.end(),
+                                            ed[a].values.begin() + std::ptrdiff_t(i * w),
+                                            ed[a].values.begin() + std::ptrdiff_t((i + 1) * w));
+        }
+      }
+    }
+  }
+  in.clear();
+  const std::size_t count = ids.size();
+  // Parents found here, by coordinates.
+  std::vector<VertexId> parent(2 * count, kNoVertex);
+  for (std::size_t v = 0; v < count && tree; ++v) {
+    const double *p = parents.data() + v * pw;
+    if (std::isnan(p[0]))
+      continue;
+    const VertexId a = index.find(p), b = index.find(p + dim);
+    if (a != kNoVertex && b != kNoVertex) {
+      parent[2 * v] = a;
+      parent[2 * v + 1] = b;
+    }
+  }
+  // The order: input vertices by their input id, then the made ones by
+  // level, then after their parents of the same level, then as received.
+  std::vector<int> height(count, 0);
+  if (tree) {
+    std::vector<int> state(count, -1);
+    std::vector<VertexId> stack;
+    for (std::size_t v0 = 0; v0 < count; ++v0) {
+      stack.assign(1, VertexId(v0));
+      while (!stack.empty()) {
+        const VertexId u = stack.back();
+        if (state[u] >= 0) {
+          stack.pop_back();
+          continue;
+        }
+        int h = 0;
+        bool ready = true;
+        for (int k = 0; k < 2; ++k) {
+          const VertexId q = parent[2 * std::size_t(u) + std::size_t(k)];
+          if (q == kNoVertex || level[q] != level[u])
+            continue;
+          if (state[q] >= 0)
+            h = std::max(h, state[q] + 1);
+          else if (state[q] == -2)
+            throw CheckError("rebalance: a vertex is its own ancestor");
+          else {
+            stack.push_back(q);
+            ready = false;
+          }
+        }
+        if (ready) {
+          state[u] = h;
+          stack.pop_back();
+        } else {
+          state[u] = -2;
+        }
+      }
+    }
+    height = state;
+  }
+  std::vector<VertexId> order(count);
+  std::iota(order.begin(), order.end(), VertexId(0));
+  const std::uint64_t none = ~std::uint64_t(0);
+  std::stable_sort(order.begin(), order.end(), [&](VertexId a, VertexId b) {
+    const bool ia = ids[a] != none, ib = ids[b] != none;
+    if (ia != ib)
+      return ia;
+    if (ia)
+      return ids[a] < ids[b];
+    return level[a] != level[b] ? level[a] < level[b] : height[a] < height[b];
+  });
+  std::vector<VertexId> id_of(count);
+  for (std::size_t i = 0; i < count; ++i)
+    id_of[order[i]] = VertexId(i);
+  out.coords.resize(coords.size());
+  for (std::size_t i = 0; i < count; ++i)
+    std::copy_n(coords.data() + std::size_t(order[i]) * dim, dim,
+                out.coords.data() + i * std::size_t(dim));
+  for (DataArray &a : out.point_data) {
+    const std::size_t k = std::size_t(a.components);
+    std::vector<double> values(a.values.size());
+    for (std::size_t i = 0; i < count; ++i)
+      std::copy_n(a.values.data() + std::size_t(order[i]) * k, k, values.data() + i * k);
+    a.values = std::move(values);
+  }
+  for (VertexId &x : out.cells)
+    x = id_of[x];
+  for (Entities &block : entities)
+    for (VertexId &x : block.vertices)
+      x = id_of[x];
+  out.entities = std::move(entities);
+  d.input_vertex.clear();
+  for (std::size_t i = 0; i < count && ids[order[i]] != none; ++i)
+    d.input_vertex.push_back(ids[order[i]]);
+  d.parent_points.clear();
+  if (tree) {
+    out.parent_edge.assign(2 * count, kNoVertex);
+    out.level.resize(count);
+    d.parent_points.resize(count * pw);
+    for (std::size_t i = 0; i < count; ++i) {
+      const VertexId v = order[i];
+      out.level[i] = level[v];
+      std::copy_n(parents.data() + std::size_t(v) * pw, pw, d.parent_points.data() + i * pw);
+      if (parent[2 * std::size_t(v)] != kNoVertex) {
+        out.parent_edge[2 * i] = id_of[parent[2 * std::size_t(v)]];
+        out.parent_edge[2 * i + 1] = id_of[parent[2 * std::size_t(v) + 1]];
+      }
+    }
+  } else {
+    out.generation.clear();
+  }
+  d.local = std::move(out);
+
+  // Who else holds each vertex: a directory, each vertex at the home rank
+  // its coordinates hash to.
+  const Mesh &nm = d.local;
+  auto home = [&](const double *p) {
+    std::uint64_t h = 0x243F6A8885A308D3ull;
+    for (int k = 0; k < dim; ++k) {
+      double x = p[k] == 0 ? 0.0 : p[k];
+      std::uint64_t b;
+      std::memcpy(&b, &x, 8);
+      h = (h ^ b) * 0x9E3779B97F4A7C15ull;
+      h ^= h >> 29;
+    }
+    return int(h % static_cast<std::uint64_t>(P));
+  };
+  std::vector<std::vector<double>> ask(np);
+  std::vector<std::vector<VertexId>> asked(np);
+  for (std::size_t v = 0; v < nm.num_vertices(); ++v) {
+    const int h = home(nm.point(VertexId(v)));
+    ask[std::size_t(h)].insert(ask[std::size_t(h)].end(), nm.point(VertexId(v)),
+                               nm.point(VertexId(v)) + dim);
+    asked[std::size_t(h)].push_back(VertexId(v));
+  }
+  auto exchange = [&](const auto &send, auto &receive, MPI_Datatype type) {
+    using T = typename std::decay_t<decltype(send[0])>::value_type;
+    std::vector<int> sc(np), rc(np), sd(np + 1, 0), rd(np + 1, 0);
+    for (int r = 0; r < P; ++r)
+      sc[std::size_t(r)] = int(send[std::size_t(r)].size());
+    MPI_Alltoall(sc.data(), 1, MPI_INT, rc.data(), 1, MPI_INT, comm);
+    std::vector<T> flat;
+    for (int r = 0; r < P; ++r) {
+      sd[std::size_t(r) + 1] = sd[std::size_t(r)] + sc[std::size_t(r)];
+      rd[std::size_t(r) + 1] = rd[std::size_t(r)] + rc[std::size_t(r)];
+      flat.insert(flat.end(), send[std::size_t(r)].begin(), send[std::size_t(r)].end());
+    }
+    std::vector<T> got(std::size_t(rd[np]));
+    MPI_Alltoallv(flat.data(), sc.data(), sd.data(), type, got.data(), rc.data(), rd.data(), type,
+                  comm);
+    receive.assign(std::size_t(P), {});
+    for (int r = 0; r < P; ++r)
+      receive[std::size_t(r)].assign(got.begin() + rd[std::size_t(r)],
+                                     got.begin() + rd[std::size_t(r) + 1]);
+  };
+  std::vector<std::vector<double>> heard;
+  exchange(ask, heard, MPI_DOUBLE);
+  // At home: every point heard, with the ranks that hold it.
+  std::map<std::vector<double>, std::vector<int>> holders;
+  for (int r = 0; r < P; ++r)
+    for (std::size_t at = 0; at < heard[std::size_t(r)].size(); at += std::size_t(dim))
+      holders[std::vector<double>(heard[std::size_t(r)].begin() + std::ptrdiff_t(at),
+                                  heard[std::size_t(r)].begin() + std::ptrdiff_t(at + dim))]
+          .push_back(r);
+  // Replies, in the order asked: a count, then the other holders.
+  std::vector<std::vector<int>> reply(np);
+  for (int r = 0; r < P; ++r)
+    for (std::size_t at = 0; at < heard[std::size_t(r)].size(); at += std::size_t(dim)) {
+      const std::vector<int> &hs =
+          holders[std::vector<double>(heard[std::size_t(r)].begin() + std::ptrdiff_t(at),
+                                      heard[std::size_t(r)].begin() + std::ptrdiff_t(at + dim))];
+      reply[std::size_t(r)].push_back(int(hs.size()) - 1);
+      for (int q : hs)
+        if (q != r)
+          reply[std::size_t(r)].push_back(q);
+    }
+  heard.clear();
+  holders.clear();
+  std::vector<std::vector<int>> answers;
+  exchange(reply, answers, MPI_INT);
+  d.sharers.assign(nm.num_vertices(), {});
+  for (int h = 0; h < P; ++h) {
+    std::size_t at = 0;
+    for (const VertexId v : asked[std::size_t(h)]) {
+      const int k = answers[std::size_t(h)][at++];
+      d.sharers[v].assign(answers[std::size_t(h)].begin() + std::ptrdiff_t(at),
+                          answers[std::size_t(h)].begin() + std::ptrdiff_t(at + std::size_t(k)));
+      std::sort(d.sharers[v].begin(), d.sharers[v].end());
+      at += std::size_t(k);
+    }
+  }
+  std::vector<int> nb;
+  for (const std::vector<int> &s : d.sharers)
+    nb.insert(nb.end(), s.begin(), s.end());
+  std::sort(nb.begin(), nb.end());
+  nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+  d.neighbours = nb;
+  MPI_Comm graph;
+  MPI_Dist_graph_create_adjacent(comm, int(nb.size()), nb.empty() ? MPI_WEIGHTS_EMPTY : nb.data(),
+                                 MPI_UNWEIGHTED, int(nb.size()),
+                                 nb.empty() ? MPI_WEIGHTS_EMPTY : nb.data(), MPI_UNWEIGHTED,
+                                 MPI_INFO_NULL, 0, &graph);
+  d.graph = Communicator(graph);
+  count_global(d);
+}
+
+} // namespace
+
+bool rebalance(DistributedMesh &d, const Invariants &part_original, double border_original,
+               double tolerance) {
   if (d.size == 1 || imbalance(d) <= 1 + tolerance || d.local.marking == Marking::Explicit)
     return false;
-  Mesh whole = gather(d, 0);
-  // What passes through the root is checked there (the parts' own checks
-  // start again from the new parts).
-  std::string failure;
-  if (d.rank == 0) {
-    const CheckResult check = check_refined(whole, original);
-    if (!check.ok)
-      failure = check.failure.empty() ? "the gathered mesh fails the final check" : check.failure;
-  }
-  failure = broadcast(failure, 0, d.comm.get());
-  if (!failure.empty())
-    throw CheckError("before rebalancing: " + failure);
-  MPI_Comm comm = d.comm.get();
-  DistributedMesh fresh = distribute(whole, 0, comm);
-  d = std::move(fresh);
+  // What moves is checked first (the parts' own checks start again from
+  // the new parts).
+  const CheckResult check = check_refined(d, part_original, border_original);
+  if (!check.ok)
+    throw CheckError("before rebalancing: " + check.failure);
+  migrate(d, hilbert_destinations(d));
   return true;
 }
 
@@ -1491,9 +2006,8 @@ void write_pvtu(const std::string &path, DistributedMesh &d, bool force,
         DataArray par{kPieceParentsArray, int(k), std::vector<double>(nv * k), ValueType::Float64};
         for (std::size_t v = 0; v < nv; ++v) {
           double *to = par.values.data() + v * k;
-          const double *far = v < d.input_vertex.size() && !d.input_parent_points.empty()
-                                  ? d.input_parent_points.data() + v * k
-                                  : nullptr;
+          const double *far =
+              (v + 1) * k <= d.parent_points.size() ? d.parent_points.data() + v * k : nullptr;
           if (parents[2 * v] != kNoVertex) {
             std::copy_n(m.point(parents[2 * v]), m.dim, to);
             std::copy_n(m.point(parents[2 * v + 1]), m.dim, to + m.dim);

@@ -313,7 +313,7 @@ int run_refine_mpi(const DistributedArgs &a) {
       const auto t_balance = std::chrono::steady_clock::now();
       const double before = imbalance(d);
       // (not after the last iteration: nothing is refined after it)
-      const bool moved = it < a.iterations && rebalance(d, original, 0.1);
+      const bool moved = it < a.iterations && rebalance(d, part_original, border_original, 0.1);
       if (moved) {
         part_original = measure_invariants(d.local, false);
         border_original = border_measure(d);
