@@ -77,10 +77,10 @@ void tree_from_pieces(Mesh &out, std::size_t fixed, const std::string &path) {
     throw InputError(path, std::string("the pieces' tree is incomplete: ") + kPieceGenerationArray +
                                ", " + kPieceLevelArray + " and " + kPieceParentsArray +
                                " come together");
-  if (par->components != 2 * dim || lev->components != 1 || gen->components != 1)
-    throw InputError(path, std::string("the pieces' tree arrays have the wrong number of "
-                                       "components (") +
-                               kPieceParentsArray + ": " + std::to_string(2 * dim) + ")");
+  for (const auto &[array, want] : {std::pair{gen, 1}, std::pair{lev, 1}, std::pair{par, 2 * dim}})
+    if (array->components != want)
+      throw InputError(path, array->name + " has " + std::to_string(array->components) +
+                                 " components, not " + std::to_string(want));
   const std::size_t nv = out.num_vertices();
   // Vertices by coordinates, to find each parent.
   std::vector<VertexId> by_point(nv);
@@ -102,9 +102,14 @@ void tree_from_pieces(Mesh &out, std::size_t fixed, const std::string &path) {
   for (std::size_t v = 0; v < nv; ++v) {
     const double *p = par->values.data() + v * 2 * std::size_t(dim);
     level[v] = lev->values[v];
-    if (std::equal(p, p + dim, out.point(VertexId(v))) &&
-        std::equal(p + dim, p + 2 * dim, out.point(VertexId(v))))
+    const bool self_a = std::equal(p, p + dim, out.point(VertexId(v))),
+               self_b = std::equal(p + dim, p + 2 * dim, out.point(VertexId(v)));
+    if (self_a && self_b)
       continue; // an original vertex
+    if (self_a || self_b)
+      throw InputError(path, "point " + std::to_string(v) +
+                                 " of the merged pieces: " + kPieceParentsArray +
+                                 " names the point itself as one end of its parent edge");
     for (int k = 0; k < 2; ++k) {
       parent[2 * v + std::size_t(k)] = find(p + k * dim);
       if (parent[2 * v + std::size_t(k)] == kNoVertex) {
@@ -135,7 +140,14 @@ void tree_from_pieces(Mesh &out, std::size_t fixed, const std::string &path) {
       bool ready = true;
       for (int k = 0; k < 2; ++k) {
         const VertexId q = parent[2 * std::size_t(u) + std::size_t(k)];
-        if (q == kNoVertex || q < fixed || level[q] != level[u])
+        if (q == kNoVertex || q < fixed)
+          continue;
+        if (level[q] > level[u])
+          throw InputError(path, std::string(kPieceLevelArray) + ": a point of level " +
+                                     std::to_string(static_cast<long long>(level[u])) +
+                                     " is the midpoint of an edge with an end of level " +
+                                     std::to_string(static_cast<long long>(level[q])));
+        if (level[q] != level[u])
           continue;
         if (height[q] >= 0) {
           h = std::max(h, height[q] + 1);
