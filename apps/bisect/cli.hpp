@@ -5,6 +5,7 @@
 #pragma once
 
 #include "bisect/bisect.hpp"
+#include "bisect/coarsen.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -109,5 +110,9 @@ std::vector<std::uint8_t> colouring_of(Mesh &mesh, const std::string &path, bool
 
 // Prints `j` on stdout as one line.
 void print_json(const nlohmann::json &j);
+
+// bisect coarsen's progress (coarsen.cpp): prints one line per finished pass
+// on stderr unless `quiet`, with the seconds since the one before.
+std::function<void(const CoarsenPass &)> coarsen_pass_printer(int passes, bool quiet);
 
 } // namespace bisect::cli

@@ -114,18 +114,7 @@ int run_coarsen(const CoarsenArgs &a) {
     mesh.cell_data.push_back(std::move(origin));
     options.first_arrays.push_back(kOriginArray);
   }
-  auto t_pass = std::chrono::steady_clock::now();
-  auto on_pass = [&](const CoarsenPass &p) {
-    if (!quiet) {
-      char buf[256];
-      std::snprintf(buf, sizeof buf, "pass %d%s: %s cells, %s %s removed, %.2f s\n", p.pass,
-                    a.passes ? ("/" + std::to_string(a.passes)).c_str() : "",
-                    with_commas(p.cells).c_str(), with_commas(p.removed_vertices).c_str(),
-                    p.removed_vertices == 1 ? "vertex" : "vertices", seconds_since(t_pass));
-      std::cerr << buf;
-    }
-    t_pass = std::chrono::steady_clock::now();
-  };
+  const auto on_pass = coarsen_pass_printer(a.passes, quiet);
   const CoarsenResult result = coarsen(mesh, marks, options, on_pass);
 
   // The coarsened mesh covers the input's domain exactly and conforms.
@@ -163,6 +152,22 @@ int run_coarsen(const CoarsenArgs &a) {
 }
 
 } // namespace
+
+std::function<void(const CoarsenPass &)> coarsen_pass_printer(int passes, bool quiet) {
+  auto t_pass =
+      std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
+  return [=](const CoarsenPass &p) {
+    if (!quiet) {
+      char buf[256];
+      std::snprintf(buf, sizeof buf, "pass %d%s: %s cells, %s %s removed, %.2f s\n", p.pass,
+                    passes ? ("/" + std::to_string(passes)).c_str() : "",
+                    with_commas(p.cells).c_str(), with_commas(p.removed_vertices).c_str(),
+                    p.removed_vertices == 1 ? "vertex" : "vertices", seconds_since(*t_pass));
+      std::cerr << buf;
+    }
+    *t_pass = std::chrono::steady_clock::now();
+  };
+}
 
 Command add_coarsen(CLI::App &app) {
   auto a = std::make_shared<CoarsenArgs>();

@@ -7,6 +7,7 @@
 #include "bisect/io.hpp"
 #include "bisect/state.hpp"
 #include "core/faces.hpp"
+#include "core/heights.hpp"
 
 #include <algorithm>
 #include <array>
@@ -126,46 +127,14 @@ void tree_from_pieces(Mesh &out, std::size_t fixed, const std::string &path) {
   // The new order of the vertices after `fixed`: by level, then by height
   // (0 when no parent of the same level follows `fixed`, else one more than
   // the highest such parent), then as they are.
-  std::vector<int> height(nv, -1); // -1 not yet, -2 waiting for its parents
-  std::vector<VertexId> stack;
-  for (std::size_t v0 = fixed; v0 < nv; ++v0) {
-    stack.assign(1, VertexId(v0));
-    while (!stack.empty()) {
-      const VertexId u = stack.back();
-      if (height[u] >= 0) {
-        stack.pop_back();
-        continue;
-      }
-      int h = 0;
-      bool ready = true;
-      for (int k = 0; k < 2; ++k) {
-        const VertexId q = parent[2 * std::size_t(u) + std::size_t(k)];
-        if (q == kNoVertex || q < fixed)
-          continue;
-        if (level[q] > level[u])
-          throw InputError(path, std::string(kPieceLevelArray) + ": a point of level " +
-                                     std::to_string(static_cast<long long>(level[u])) +
-                                     " is the midpoint of an edge with an end of level " +
-                                     std::to_string(static_cast<long long>(level[q])));
-        if (level[q] != level[u])
-          continue;
-        if (height[q] >= 0) {
-          h = std::max(h, height[q] + 1);
-        } else if (height[q] == -2 || q == u) {
-          throw InputError(path, "the pieces' tree has a cycle (a vertex is its own ancestor)");
-        } else {
-          stack.push_back(q);
-          ready = false;
-        }
-      }
-      if (ready) {
-        height[u] = h;
-        stack.pop_back();
-      } else {
-        height[u] = -2;
-      }
-    }
-  }
+  HeightProblem problem;
+  const std::vector<int> height = parent_heights(parent, level, fixed, true, problem);
+  if (problem == HeightProblem::Cycle)
+    throw InputError(path, "the pieces' tree has a cycle (a vertex is its own ancestor)");
+  if (problem == HeightProblem::ParentNewer)
+    throw InputError(path,
+                     std::string(kPieceLevelArray) +
+                         ": a point is the midpoint of an edge with an end of a higher level");
   std::vector<VertexId> order(nv);
   std::iota(order.begin(), order.end(), VertexId(0));
   std::stable_sort(order.begin() + std::ptrdiff_t(fixed), order.end(), [&](VertexId a, VertexId b) {

@@ -15,6 +15,7 @@
 #include "bisect/region.hpp"
 #include "bisect/state.hpp"
 #include "core/faces.hpp"
+#include "core/heights.hpp"
 
 #include <algorithm>
 #include <array>
@@ -30,6 +31,7 @@
 #include <numeric>
 #include <regex>
 #include <sstream>
+#include <stdexcept>
 #include <unordered_map>
 
 namespace bisect {
@@ -1036,36 +1038,16 @@ Mesh gather(const DistributedMesh &d, int root) {
     return p ? unique_at(p) : kNoVertex;
   };
   if (tree) {
-    for (std::size_t u = 0; u < unique.size(); ++u)
+    std::vector<VertexId> up(2 * unique.size());
+    for (std::size_t u = 0; u < unique.size(); ++u) {
       level_of[u] = parts[std::size_t(unique[u].part)].level[unique[u].v];
-    std::vector<VertexId> stack;
-    for (std::size_t u0 = 0; u0 < unique.size(); ++u0) {
-      stack.assign(1, VertexId(u0));
-      while (!stack.empty()) {
-        const VertexId u = stack.back();
-        if (height[u] >= 0) {
-          stack.pop_back();
-          continue;
-        }
-        int h = 0;
-        bool ready = true;
-        for (int k = 0; k < 2; ++k) {
-          const VertexId q = parent_unique(unique[u], k);
-          if (q == kNoVertex || level_of[q] != level_of[u])
-            continue;
-          if (height[q] < 0) {
-            stack.push_back(q);
-            ready = false;
-          } else {
-            h = std::max(h, height[q] + 1);
-          }
-        }
-        if (ready) {
-          height[u] = h;
-          stack.pop_back();
-        }
-      }
+      for (int k = 0; k < 2; ++k)
+        up[2 * u + std::size_t(k)] = parent_unique(unique[u], k);
     }
+    HeightProblem problem;
+    height = parent_heights(up, level_of, 0, false, problem);
+    if (problem != HeightProblem::None)
+      throw std::logic_error("gather: a vertex made by bisection is its own ancestor");
   }
   std::vector<VertexId> order(unique.size());
   std::iota(order.begin(), order.end(), 0);
@@ -1119,7 +1101,8 @@ Mesh gather(const DistributedMesh &d, int root) {
         const double *q = parent_point(p, lv, k);
         const VertexId e = q ? at.find(q) : kNoVertex;
         if (e == kNoVertex)
-          throw CheckError("gather: the parents of a vertex made by bisection are in no part");
+          throw std::logic_error(
+              "gather: the parents of a vertex made by bisection are in no part");
         g.parent_edge[2 * v + std::size_t(k)] = e;
       }
       // Parts may have made it from either end first: smaller id first.
@@ -1578,40 +1561,10 @@ void migrate(DistributedMesh &d, const std::vector<int> &dest) {
   // level, then after their parents of the same level, then as received.
   std::vector<int> height(count, 0);
   if (tree) {
-    std::vector<int> state(count, -1);
-    std::vector<VertexId> stack;
-    for (std::size_t v0 = 0; v0 < count; ++v0) {
-      stack.assign(1, VertexId(v0));
-      while (!stack.empty()) {
-        const VertexId u = stack.back();
-        if (state[u] >= 0) {
-          stack.pop_back();
-          continue;
-        }
-        int h = 0;
-        bool ready = true;
-        for (int k = 0; k < 2; ++k) {
-          const VertexId q = parent[2 * std::size_t(u) + std::size_t(k)];
-          if (q == kNoVertex || level[q] != level[u])
-            continue;
-          if (state[q] >= 0)
-            h = std::max(h, state[q] + 1);
-          else if (state[q] == -2)
-            throw CheckError("rebalance: a vertex is its own ancestor");
-          else {
-            stack.push_back(q);
-            ready = false;
-          }
-        }
-        if (ready) {
-          state[u] = h;
-          stack.pop_back();
-        } else {
-          state[u] = -2;
-        }
-      }
-    }
-    height = state;
+    HeightProblem problem;
+    height = parent_heights(parent, level, 0, false, problem);
+    if (problem != HeightProblem::None)
+      throw std::logic_error("rebalance: a vertex is its own ancestor");
   }
   std::vector<VertexId> order(count);
   std::iota(order.begin(), order.end(), VertexId(0));

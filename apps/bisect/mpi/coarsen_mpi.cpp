@@ -26,50 +26,36 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
   // exit code (only rank 0 prints it).
   Mesh mesh;
   Invariants original;
-  int failure = 0;
-  std::string message;
   std::unique_ptr<OutputSet> outputs;
   int h_mesh = -1;
-  if (rank == 0) {
-    try {
-      std::vector<std::string> inputs{a.input};
-      if (!a.region.empty())
-        inputs.push_back(a.region);
-      if (!pvtu)
-        check_extension(a.output);
-      outputs = std::make_unique<OutputSet>(inputs, a.force);
-      if (!pvtu)
-        h_mesh = outputs->add(a.output);
-      mesh = load_mesh(a.input, load_progress(a.input, quiet));
-      if (!pvtu)
-        check_output_format(a.output, mesh.dim);
-      if (!a.region.empty())
-        (void)read_region(a.region, mesh.dim);
-      if (!a.indicator.empty())
-        (void)cell_indicator(mesh, a.indicator, a.input);
-      // (The serial coarsen writes such a mesh unchanged.)
-      if (!mesh.marked() || !mesh.has_tree())
-        throw InputError(a.input, "carries no bisection tree (bisect:generation, "
-                                  "bisect:parent_a/b): nothing to coarsen");
-      original = measure_invariants(mesh, a.check);
-      if (!quiet)
-        std::cerr << "bisect: " << a.input << ": " << mesh.dim << "D, "
-                  << with_commas(mesh.num_cells()) << " cells, " << with_commas(mesh.num_vertices())
-                  << " vertices\n";
-    } catch (const Error &e) {
-      failure = e.kind == ErrorKind::Check ? kExitCheck : kExitInput;
-      message = e.what();
-    } catch (const std::bad_alloc &) {
-      failure = kExitMemory;
-      message = "out of memory reading the input";
-    }
-  }
-  MPI_Bcast(&failure, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  if (failure) {
-    if (rank == 0)
-      std::cerr << "bisect: " << one_line(message) << "\n";
+  const int failure = on_rank_zero(rank, [&] {
+    std::vector<std::string> inputs{a.input};
+    if (!a.region.empty())
+      inputs.push_back(a.region);
+    if (!pvtu)
+      check_extension(a.output);
+    outputs = std::make_unique<OutputSet>(inputs, a.force);
+    if (!pvtu)
+      h_mesh = outputs->add(a.output);
+    mesh = load_mesh(a.input, load_progress(a.input, quiet));
+    if (!pvtu)
+      check_output_format(a.output, mesh.dim);
+    if (!a.region.empty())
+      (void)read_region(a.region, mesh.dim);
+    if (!a.indicator.empty())
+      (void)cell_indicator(mesh, a.indicator, a.input);
+    // (The serial coarsen writes such a mesh unchanged.)
+    if (!mesh.marked() || !mesh.has_tree())
+      throw InputError(a.input, "carries no bisection tree (bisect:generation, "
+                                "bisect:parent_a/b): nothing to coarsen");
+    original = measure_invariants(mesh, a.check);
+    if (!quiet)
+      std::cerr << "bisect: " << a.input << ": " << mesh.dim << "D, "
+                << with_commas(mesh.num_cells()) << " cells, " << with_commas(mesh.num_vertices())
+                << " vertices\n";
+  });
+  if (failure)
     return failure;
-  }
   int dim = mesh.dim;
   MPI_Bcast(&dim, 1, MPI_INT, 0, MPI_COMM_WORLD);
 
@@ -93,18 +79,7 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
     CoarsenOptions options;
     options.passes = a.passes;
     options.sum_arrays = a.sums;
-    auto t_pass = std::chrono::steady_clock::now();
-    auto on_pass = [&](const CoarsenPass &p) {
-      if (!quiet) {
-        char buf[256];
-        std::snprintf(buf, sizeof buf, "pass %d%s: %s cells, %s %s removed, %.2f s\n", p.pass,
-                      a.passes ? ("/" + std::to_string(a.passes)).c_str() : "",
-                      with_commas(p.cells).c_str(), with_commas(p.removed_vertices).c_str(),
-                      p.removed_vertices == 1 ? "vertex" : "vertices", seconds_since(t_pass));
-        std::cerr << buf;
-      }
-      t_pass = std::chrono::steady_clock::now();
-    };
+    const auto on_pass = coarsen_pass_printer(a.passes, quiet);
     const CoarsenResult result = coarsen(d, marks, options, on_pass);
 
     // The final check across the new parts, against the input's volume and
@@ -167,18 +142,9 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
                 << with_commas(result.removed_vertices) << " vertices removed) in " << std::fixed
                 << std::setprecision(2) << total << " s\n";
     return kExitOk;
-  } catch (const Error &e) {
-    // The distributed steps throw on every rank alike: rank 0 speaks for all.
-    if (rank == 0)
-      std::cerr << "bisect: " << one_line(e.what()) << "\n";
-    return e.kind == ErrorKind::Check   ? kExitCheck
-           : e.kind == ErrorKind::Limit ? kExitLimit
-                                        : kExitInput;
-  } catch (const std::exception &e) {
-    std::cerr << "bisect: rank " << rank << ": " << one_line(e.what()) << "\n";
-    MPI_Abort(MPI_COMM_WORLD, kExitCheck);
+  } catch (...) {
+    return distributed_exit_code(rank);
   }
-  return kExitCheck;
 }
 
 } // namespace bisect::cli

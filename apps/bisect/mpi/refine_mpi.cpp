@@ -13,6 +13,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <iterator>
@@ -132,59 +133,44 @@ int run_refine_mpi(const DistributedArgs &a) {
   // its exit code (only rank 0 prints it).
   Mesh mesh;
   Invariants original;
-  int failure = 0;
-  std::string message;
   std::unique_ptr<OutputSet> outputs;
   int h_mesh = -1, h_csv = -1;
-  if (rank == 0) {
-    try {
-      if (!pvtu) {
-        check_extension(a.output);
-        std::vector<std::string> inputs{a.input};
-        if (!a.region.empty())
-          inputs.push_back(a.region);
-        outputs = std::make_unique<OutputSet>(inputs, a.force);
-        h_mesh = outputs->add(a.output);
-      } else {
-        outputs = std::make_unique<OutputSet>(a.region.empty()
-                                                  ? std::vector<std::string>{a.input}
-                                                  : std::vector<std::string>{a.input, a.region},
-                                              a.force);
-      }
-      if (a.csv != "none")
-        h_csv = outputs->add(a.csv);
-      mesh = load_for_refinement(a.input, a.marking, quiet);
-      if (!pvtu)
-        check_output_format(a.output, mesh.dim);
+  const int failure = on_rank_zero(rank, [&] {
+    if (!pvtu) {
+      check_extension(a.output);
+      std::vector<std::string> inputs{a.input};
       if (!a.region.empty())
-        (void)read_region(a.region, mesh.dim);
-      original = measure_invariants(mesh, false);
-      if (!a.indicator.empty()) {
-        // The indicator marks the input's cells (one iteration): the marks
-        // travel with the cells as a cell array, removed after selecting.
-        const std::vector<double> values = cell_indicator(mesh, a.indicator, a.input);
-        const std::vector<CellId> marked =
-            mark_by_indicator(values, IndicatorRule(a.rule), a.parameter, a.input, &mesh);
-        DataArray flag{kMarkedArray, 1, std::vector<double>(mesh.num_cells(), 0.0),
-                       ValueType::Int8};
-        for (CellId c : marked)
-          flag.values[c] = 1;
-        mesh.cell_data.push_back(std::move(flag));
-      }
-    } catch (const Error &e) {
-      failure = e.kind == ErrorKind::Check ? kExitCheck : kExitInput;
-      message = e.what();
-    } catch (const std::bad_alloc &) {
-      failure = kExitMemory;
-      message = "out of memory reading the input";
+        inputs.push_back(a.region);
+      outputs = std::make_unique<OutputSet>(inputs, a.force);
+      h_mesh = outputs->add(a.output);
+    } else {
+      outputs = std::make_unique<OutputSet>(a.region.empty()
+                                                ? std::vector<std::string>{a.input}
+                                                : std::vector<std::string>{a.input, a.region},
+                                            a.force);
     }
-  }
-  MPI_Bcast(&failure, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  if (failure) {
-    if (rank == 0)
-      std::cerr << "bisect: " << one_line(message) << "\n";
+    if (a.csv != "none")
+      h_csv = outputs->add(a.csv);
+    mesh = load_for_refinement(a.input, a.marking, quiet);
+    if (!pvtu)
+      check_output_format(a.output, mesh.dim);
+    if (!a.region.empty())
+      (void)read_region(a.region, mesh.dim);
+    original = measure_invariants(mesh, false);
+    if (!a.indicator.empty()) {
+      // The indicator marks the input's cells (one iteration): the marks
+      // travel with the cells as a cell array, removed after selecting.
+      const std::vector<double> values = cell_indicator(mesh, a.indicator, a.input);
+      const std::vector<CellId> marked =
+          mark_by_indicator(values, IndicatorRule(a.rule), a.parameter, a.input, &mesh);
+      DataArray flag{kMarkedArray, 1, std::vector<double>(mesh.num_cells(), 0.0), ValueType::Int8};
+      for (CellId c : marked)
+        flag.values[c] = 1;
+      mesh.cell_data.push_back(std::move(flag));
+    }
+  });
+  if (failure)
     return failure;
-  }
   double inv[2] = {original.volume, original.boundary_measure};
   MPI_Bcast(inv, 2, MPI_DOUBLE, 0, MPI_COMM_WORLD);
   original.volume = inv[0];
@@ -426,6 +412,34 @@ int run_refine_mpi(const DistributedArgs &a) {
                 << (h_csv >= 0 ? " and " + a.csv : std::string()) << " in " << std::fixed
                 << std::setprecision(2) << total << " s\n";
     return stop_message.empty() ? kExitOk : kExitLimit;
+  } catch (...) {
+    return distributed_exit_code(rank);
+  }
+}
+
+int on_rank_zero(int rank, const std::function<void()> &step) {
+  int failure = 0;
+  std::string message;
+  if (rank == 0) {
+    try {
+      step();
+    } catch (const Error &e) {
+      failure = e.kind == ErrorKind::Check ? kExitCheck : kExitInput;
+      message = e.what();
+    } catch (const std::bad_alloc &) {
+      failure = kExitMemory;
+      message = "out of memory reading the input";
+    }
+  }
+  MPI_Bcast(&failure, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (failure && rank == 0)
+    std::cerr << "bisect: " << one_line(message) << "\n";
+  return failure;
+}
+
+int distributed_exit_code(int rank) {
+  try {
+    throw;
   } catch (const Error &e) {
     // The distributed steps throw on every rank alike (a refusal, a failed
     // write): rank 0 speaks for all.
@@ -435,6 +449,7 @@ int run_refine_mpi(const DistributedArgs &a) {
            : e.kind == ErrorKind::Limit ? kExitLimit
                                         : kExitInput;
   } catch (const std::exception &e) {
+    // One rank alone (an internal error): the job cannot go on.
     std::cerr << "bisect: rank " << rank << ": " << one_line(e.what()) << "\n";
     MPI_Abort(MPI_COMM_WORLD, kExitCheck);
   }

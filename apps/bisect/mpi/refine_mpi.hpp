@@ -4,6 +4,7 @@
 #include "bisect/io.hpp"
 #include "bisect/mesh.hpp"
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -46,5 +47,14 @@ int mpi_world_size();
 int run_refine_mpi(const DistributedArgs &args);
 // The distributed coarsen (coarsen() of distributed.hpp): the same cases.
 int run_coarsen_mpi(const DistributedCoarsenArgs &args);
+// Inside a catch block of a distributed command: the exit code for the
+// exception being handled. A bisect::Error is thrown on every rank alike
+// and said once by rank 0; anything else is one rank's internal error,
+// said by that rank, and the job is aborted.
+int distributed_exit_code(int rank);
+// Runs `step` on rank 0 (reading and checking the input); its failure (an
+// input or check error, or memory) ends every rank: returns the exit code
+// on every rank (0: go on), and rank 0 says why in one line. Collective.
+int on_rank_zero(int rank, const std::function<void()> &step);
 
 } // namespace bisect::cli
