@@ -20,6 +20,6 @@ fi
 # build-mpi/, and its tests under mpirun (tests/mpi/).
 cmake -S "$root" -B "$root/build-mpi" -DCMAKE_BUILD_TYPE=Release -DBISECT_MPI=ON -DBISECT_TESTS=OFF \
   -DBISECT_PYTHON=OFF >/dev/null
-cmake --build "$root/build-mpi" -j "$(nproc)" --target bisect
+cmake --build "$root/build-mpi" -j "$(nproc)" --target bisect bisect_mpi_hooked
 cd "$root/build-mpi" && ctest --output-on-failure -R '^mpi\.'
 

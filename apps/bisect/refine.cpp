@@ -72,11 +72,11 @@ int run_refine(const RefineArgs &a) {
 #ifdef BISECT_MPI
   // Under mpirun, or for a .pvtu: the distributed refine (README, "MPI").
   if (mpi_world_size() > 1 || a.output.ends_with(".pvtu")) {
-    if (!a.slices.empty() || a.check || a.output == "-" || !a.format.empty() || a.origin)
+    if (!a.slices.empty() || a.output == "-" || !a.format.empty() || a.origin)
       throw UsageError("distributed refine (mpirun or a .pvtu output) takes --region, "
                        "--indicator with its rule, --depth, --iterations, --marking, "
-                       "--max-elements, --max-memory, --compression, --quality-csv, --force, "
-                       "--quiet and --json; --slices, --check, --origin, --format and -o - "
+                       "--max-elements, --max-memory, --check, --compression, --quality-csv, "
+                       "--force, --quiet and --json; --slices, --origin, --format and -o - "
                        "need a serial run");
     if (a.output.empty())
       throw UsageError("distributed refine needs -o (a .pvtu, or a .vtu/.msh to gather into)");
@@ -95,6 +95,7 @@ int run_refine(const RefineArgs &a) {
     d.marking = marking;
     d.max_elements = std::size_t(a.max_elements);
     d.max_memory_gib = a.max_memory_gib;
+    d.check = a.check;
     d.compression = a.compression == "lz4"    ? Compression::Lz4
                     : a.compression == "none" ? Compression::None
                                               : Compression::Zlib;

@@ -1722,7 +1722,8 @@ bool rebalance(DistributedMesh &d, const Invariants &part_original, double borde
   // the new parts).
   const CheckResult check = check_refined(d, part_original, border_original);
   if (!check.ok)
-    throw CheckError("before rebalancing: " + check.failure);
+    throw CheckError("internal check failed before rebalancing: " + check.failure +
+                     "; no output written");
   migrate(d, hilbert_destinations(d));
   return true;
 }

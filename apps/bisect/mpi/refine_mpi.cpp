@@ -22,6 +22,10 @@
 
 namespace bisect::cli {
 
+// The test hook of refine.cpp (set only in the bisect_mpi_hooked test
+// binary): here it sees each rank's part after each iteration.
+extern void (*g_after_iteration_hook)(int iteration, Mesh &mesh, std::size_t first_new_vertex);
+
 namespace {
 
 bool g_we_initialised = false;
@@ -258,6 +262,7 @@ int run_refine_mpi(const DistributedArgs &a) {
       RefineLimits limits;
       if (keep)
         limits.cancel = &never;
+      const std::size_t first_new = d.local.num_vertices();
       const DistributedRefineResult r = refine_marked(d, selected, a.depth, limits);
       if (r.precision_reached) {
         if (!kept_part)
@@ -292,6 +297,16 @@ int run_refine_mpi(const DistributedArgs &a) {
                             ? "bisect: the region touches no cell; nothing more to refine\n"
                             : "bisect: nothing is marked; the mesh is written unchanged\n");
         break;
+      }
+      if (g_after_iteration_hook)
+        g_after_iteration_hook(it, d.local, first_new);
+      // --check: the final check across ranks after every iteration, so a
+      // failure names the iteration it happened in.
+      if (a.check) {
+        const CheckResult c = check_refined(d, part_original, border_original);
+        if (!c.ok)
+          throw CheckError("internal check failed after iteration " + std::to_string(it) + ": " +
+                           c.failure + "; no output written");
       }
       q = quality_summary(d);
       // Parts more than 10% above the mean are made again along the curve

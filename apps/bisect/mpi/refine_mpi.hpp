@@ -21,6 +21,7 @@ struct DistributedArgs {
   std::optional<Marking> marking;
   std::size_t max_elements = 0; // 0: none
   double max_memory_gib = 0;    // per rank; 0: the memory available, shared by the local ranks
+  bool check = false;           // the final check across ranks after every iteration
   Compression compression = Compression::Zlib;
   bool force = false, quiet = false, json = false;
 };
