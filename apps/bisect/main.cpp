@@ -8,8 +8,10 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <new>
+#include <string>
 #include <unistd.h>
 
 using namespace bisect;
@@ -18,6 +20,9 @@ using namespace bisect::cli;
 namespace {
 
 std::atomic<bool> g_interrupted{false};
+// Under mpirun only rank 0 speaks (README, "MPI"): when one rank fails,
+// mpirun ends the others with a signal, which they take silently.
+bool g_silent_signals = false;
 
 // SIGINT, SIGTERM, SIGHUP: before the outputs are committed nothing of the
 // run's result exists but temporary files, so they are removed and the
@@ -30,11 +35,15 @@ extern "C" void on_signal(int) {
   }
   remove_pending_outputs();
   static const char msg[] = "bisect: interrupted; no output written\n";
-  (void)!::write(STDERR_FILENO, msg, sizeof msg - 1);
+  if (!g_silent_signals)
+    (void)!::write(STDERR_FILENO, msg, sizeof msg - 1);
   ::_exit(kExitInterrupted);
 }
 
 void install_signal_handlers() {
+  for (const char *v : {"OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK"})
+    if (const char *rank = std::getenv(v); rank && std::string(rank) != "0")
+      g_silent_signals = true;
   struct sigaction sa {};
   sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
@@ -55,6 +64,9 @@ int main(int argc, char **argv) {
   // Under mpirun every rank runs the command (README, "MPI").
   mpi_start(&argc, &argv);
   const int code = run(argc, argv);
+  // The run has said how it ended: mpirun may end the other ranks (and this
+  // one, while it finalises) with a signal when some rank's code is not 0.
+  g_silent_signals = true;
   mpi_stop();
   return code;
 #else

@@ -43,6 +43,8 @@ for p in 2 3; do
       --quality-csv none
     grep -qE '^bisect: internal check failed' "$WORK/err" ||
       { cat "$WORK/err" >&2; fail "P=$p $out: the final check does not say it failed"; }
+    # Said once (mpirun ends the other ranks with a signal: they stay silent).
+    [[ $(grep -c '^bisect: ' "$WORK/err") == 1 ]] || { cat "$WORK/err" >&2; fail "P=$p $out: more than one line"; }
     ls out.pvtu out_*.vtu out.vtu >/dev/null 2>&1 && fail "P=$p $out: output written despite exit 2"
   done
 done
