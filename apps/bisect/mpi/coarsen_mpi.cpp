@@ -138,9 +138,10 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
     }
     if (!quiet)
       std::cerr << "bisect: wrote " << a.output << " (" << with_commas(d.global_cells) << " cells"
-                << (pvtu ? ", " + std::to_string(d.size) + " pieces" : std::string()) << ", "
-                << with_commas(result.removed_vertices) << " vertices removed) in " << std::fixed
-                << std::setprecision(2) << total << " s\n";
+                << (pvtu ? ", " + std::to_string(d.size) + (d.size == 1 ? " piece" : " pieces")
+                         : std::string())
+                << ", " << with_commas(result.removed_vertices) << " vertices removed) in "
+                << std::fixed << std::setprecision(2) << total << " s\n";
     return kExitOk;
   } catch (...) {
     return distributed_exit_code(rank);

@@ -423,8 +423,9 @@ int run_refine_mpi(const DistributedArgs &a) {
     }
     if (!quiet)
       std::cerr << "bisect: wrote " << a.output << " (" << with_commas(d.global_cells) << " cells"
-                << (pvtu ? ", " + std::to_string(d.size) + " pieces" : std::string()) << ")"
-                << (h_csv >= 0 ? " and " + a.csv : std::string()) << " in " << std::fixed
+                << (pvtu ? ", " + std::to_string(d.size) + (d.size == 1 ? " piece" : " pieces")
+                         : std::string())
+                << ")" << (h_csv >= 0 ? " and " + a.csv : std::string()) << " in " << std::fixed
                 << std::setprecision(2) << total << " s\n";
     return stop_message.empty() ? kExitOk : kExitLimit;
   } catch (...) {
