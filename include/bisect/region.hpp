@@ -7,6 +7,7 @@
 
 #include "bisect/mesh.hpp"
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -58,6 +59,9 @@ std::vector<CellId> select_touching(const Mesh &mesh, const Region &region);
 // sorted lexicographically, then the two lists compared lexicographically
 // (the same for every numbering of the cells and vertices).
 bool cell_coordinates_less(const Mesh &mesh, CellId a, CellId b);
+// A cell's vertices' coordinates, the vertices in lexicographic order (the
+// first dim (dim + 1) entries): the key cell_coordinates_less compares.
+std::array<double, 20> sorted_cell_coordinates(const Mesh &mesh, CellId c);
 
 // select_cells as a selector for run_iterations (driver.hpp); `region` must
 // outlive it.

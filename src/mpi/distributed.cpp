@@ -1292,7 +1292,7 @@ std::vector<std::uint64_t> hilbert_keys(const DistributedMesh &d) {
 // The rank each cell goes to: equal stretches of all parts' cells along the
 // curve, ties by rank and cell id (so stretches are exact even where many
 // centroids share a key). Splitters by bisection of the (key, rank, cell)
-// range, counting below each with an all-reduce (128 rounds of P - 1
+// range, counting below each with an all-reduce (129 rounds of P - 1
 // counts).
 std::vector<int> hilbert_destinations(const DistributedMesh &d) {
   using Key = unsigned __int128;
@@ -1779,14 +1779,8 @@ std::vector<CellId> select_cells(const DistributedMesh &d, const Region &region)
   const int k = d.local.dim * (d.local.dim + 1);
   std::vector<double> keys;
   for (CellId c : tied) {
-    std::vector<const double *> p;
-    for (int i = 0; i <= d.local.dim; ++i)
-      p.push_back(d.local.point(d.local.cell(c)[i]));
-    std::sort(p.begin(), p.end(), [&](const double *x, const double *y) {
-      return std::lexicographical_compare(x, x + d.local.dim, y, y + d.local.dim);
-    });
-    for (const double *x : p)
-      keys.insert(keys.end(), x, x + d.local.dim);
+    const std::array<double, 20> key = sorted_cell_coordinates(d.local, c);
+    keys.insert(keys.end(), key.begin(), key.begin() + k);
   }
   const int nk = int(keys.size());
   MPI_Allgather(&nk, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);

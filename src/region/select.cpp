@@ -13,9 +13,7 @@ std::vector<CellId> select_cells(const Mesh &mesh, const Region &region) {
   return out;
 }
 
-namespace {
-// A cell's vertices' coordinates, the vertices in lexicographic order.
-std::array<double, 20> sorted_coordinates(const Mesh &mesh, CellId c) {
+std::array<double, 20> sorted_cell_coordinates(const Mesh &mesh, CellId c) {
   const int dim = mesh.dim, n = dim + 1;
   std::array<const double *, 5> p{};
   for (int i = 0; i < n; ++i)
@@ -32,11 +30,11 @@ std::array<double, 20> sorted_coordinates(const Mesh &mesh, CellId c) {
     std::copy_n(p[std::size_t(i)], dim, out.data() + i * dim);
   return out;
 }
-} // namespace
 
 bool cell_coordinates_less(const Mesh &mesh, CellId a, CellId b) {
   const std::size_t k = std::size_t(mesh.dim) * std::size_t(mesh.dim + 1);
-  const std::array<double, 20> x = sorted_coordinates(mesh, a), y = sorted_coordinates(mesh, b);
+  const std::array<double, 20> x = sorted_cell_coordinates(mesh, a),
+                               y = sorted_cell_coordinates(mesh, b);
   return std::lexicographical_compare(x.begin(), x.begin() + std::ptrdiff_t(k), y.begin(),
                                       y.begin() + std::ptrdiff_t(k));
 }

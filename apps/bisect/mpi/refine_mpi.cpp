@@ -92,10 +92,7 @@ void mpi_start(int *argc, char ***argv) {
   g_we_initialised = true;
   // The ranks on this machine share its cores: each gets its share of
   // threads unless --threads says otherwise (parsed after this).
-  if (const char *local = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE")) {
-    const int ranks = std::max(1, std::atoi(local));
-    set_threads(std::max(1, threads() / ranks));
-  }
+  set_threads(std::max(1, threads() / local_ranks()));
 }
 
 void mpi_stop() {
