@@ -147,7 +147,7 @@ double imbalance(const DistributedMesh &d);
 // and migrates the cells there, rank to rank, with their state, tree, tags
 // and data; who shares which vertex is found again through a directory (each
 // vertex at a home rank its coordinates hash to). Returns whether it did.
-// Collective. No rank holds more than its part. The parts pass
+// Collective. No rank holds the whole mesh (only its old and new parts). The parts pass
 // check_refined(d, part_original, border_original) first, else CheckError
 // on every rank; the parts' own invariants and border_measure() must then be
 // taken again. Explicit marking keeps its parts (its edge ranks do not
