@@ -245,13 +245,7 @@ void write_mesh_file_with_state(const std::string &file, const std::string &name
     return;
   }
   const StateArrays state = stream_state(mesh);
-  try {
-    write_file_as(file, name, mesh, options, &state);
-  } catch (...) {
-    unstream_state(mesh, state);
-    throw;
-  }
-  unstream_state(mesh, state);
+  write_file_as(file, name, mesh, options, &state);
 }
 
 void check_output_format(const std::string &name, int dim, const std::string &format_name) {

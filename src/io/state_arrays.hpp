@@ -7,6 +7,7 @@
 
 #include "bisect/mesh.hpp"
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -24,7 +25,7 @@ struct ArraySource {
 
 struct StateArrays {
   std::vector<ArraySource> cells, points; // what encode_state would add, in its order
-  std::vector<bool> flipped;              // per cell: tuple positions 0 and 1 swapped
+  std::vector<std::uint8_t> flipped;      // per cell, 1: written with ids 0 and 1 swapped
   // Stored arrays the writer skips: the state's own names, and the tree's
   // (encode_state replaces them, or removes them when the mesh has no tree).
   bool hides(const std::string &name) const;
@@ -33,11 +34,14 @@ struct StateArrays {
 // Whether stream_state can stand for encode_state on `mesh`: a marked mesh
 // whose marking is not Marking::Explicit (its edge ranks stay stored).
 bool can_stream_state(const Mesh &mesh);
-// Orients every cell positively in `cells`, as encode_state does, and
-// returns the arrays encode_state would add, computed from the mesh on
-// demand (the mesh must stay unchanged while they are used). The writer
-// skips stored arrays of the same names, as encode_state replaces them.
-StateArrays stream_state(Mesh &mesh);
+// The arrays encode_state would add, computed from the mesh on demand (the
+// mesh must stay unchanged while they are used), and which cells the writer
+// must write with their first two ids swapped to orient them positively, as
+// encode_state does in place. The mesh itself is not changed, so other
+// threads may read it meanwhile (the CLI's final check runs beside the
+// write). The writer skips stored arrays of the same names, as encode_state
+// replaces them.
+StateArrays stream_state(const Mesh &mesh);
 // The tree's arrays (bisect:generation; bisect:parent_a, bisect:parent_b
 // and, when sized for the mesh, bisect:level) as sources, appended to
 // `cells` and `points`; encode_tree and stream_state share them.
@@ -45,7 +49,5 @@ void tree_sources(const Mesh &mesh, std::vector<ArraySource> &cells,
                   std::vector<ArraySource> &points);
 // A source's values as a stored array of `rows` tuples.
 DataArray materialize(const ArraySource &source, std::size_t rows);
-// Puts the tuples back as they were before stream_state.
-void unstream_state(Mesh &mesh, const StateArrays &state);
 
 } // namespace bisect

@@ -588,12 +588,26 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
     }
   }
   const std::size_t ncell_ids = mesh.cells.size();
+  // The cells stream_state orients by swapping their first two ids (the
+  // mesh itself is left as it is).
+  const std::uint8_t *flipped =
+      state && state->flipped.size() == ncells ? state->flipped.data() : nullptr;
+  auto cell_id = [&](std::size_t i) -> std::int64_t {
+    if (flipped) {
+      // Division by a constant (nvc is 3, 4 or 5): a multiply, not a divide.
+      const std::size_t c = nvc == 3 ? i / 3 : nvc == 4 ? i / 4 : i / 5;
+      const std::size_t k = i - c * std::size_t(nvc);
+      if (k < 2 && flipped[c])
+        return std::int64_t(mesh.cells[k == 0 ? i + 1 : i - 1]);
+    }
+    return std::int64_t(mesh.cells[i]);
+  };
   auto connectivity = [&](auto type) {
     using T = decltype(type);
-    write_array<T>(
-        w, compression, level, "connectivity", 1, ncell_ids + entity_ids, [&](std::size_t i) {
-          return T(i < ncell_ids ? std::int64_t(mesh.cells[i]) : entity_conn[i - ncell_ids]);
-        });
+    write_array<T>(w, compression, level, "connectivity", 1, ncell_ids + entity_ids,
+                   [&](std::size_t i) {
+                     return T(i < ncell_ids ? cell_id(i) : entity_conn[i - ncell_ids]);
+                   });
     write_array<T>(w, compression, level, "offsets", 1, nc, [&](std::size_t c) {
       return T(c < ncells ? std::int64_t((c + 1) * std::size_t(nvc)) : entity_offsets[c - ncells]);
     });
