@@ -604,10 +604,9 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
   };
   auto connectivity = [&](auto type) {
     using T = decltype(type);
-    write_array<T>(w, compression, level, "connectivity", 1, ncell_ids + entity_ids,
-                   [&](std::size_t i) {
-                     return T(i < ncell_ids ? cell_id(i) : entity_conn[i - ncell_ids]);
-                   });
+    write_array<T>(
+        w, compression, level, "connectivity", 1, ncell_ids + entity_ids,
+        [&](std::size_t i) { return T(i < ncell_ids ? cell_id(i) : entity_conn[i - ncell_ids]); });
     write_array<T>(w, compression, level, "offsets", 1, nc, [&](std::size_t c) {
       return T(c < ncells ? std::int64_t((c + 1) * std::size_t(nvc)) : entity_offsets[c - ncells]);
     });

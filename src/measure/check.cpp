@@ -133,6 +133,7 @@ constexpr std::size_t kChunkBytes = std::size_t(96) << 20;
 
 // See check_testing.hpp.
 bool g_sorted_final_walk = false;
+bool g_wide_final_walk = false;
 // The hashing path's piece size (see match_bucket); a test sets it small.
 constexpr std::size_t kMatchPiece = 2048;
 std::size_t g_match_piece = kMatchPiece;
@@ -224,7 +225,14 @@ using UIntFor =
 // buckets fills `buffer` from one scan of the cells and visits its
 // sub-simplices in key order. Chunks are independent: several threads could
 // walk different chunks, each with its own buffer and visitor.
-template <int Dim, int K, bool WithRefs, bool SideOnly, int IdBits = SideOnly ? 31 : 32>
+//
+// FineInKey (the final check's facets, SideOnly): each entry's place in its
+// coarse bucket goes into the packed integer's top bits instead of a 2-byte
+// array beside it, when the ids are narrow enough to leave room (see
+// final_facet_pass): 8 bytes an entry instead of 10, and one stream per
+// coarse bucket in the scan instead of two.
+template <int Dim, int K, bool WithRefs, bool SideOnly, int IdBits = SideOnly ? 31 : 32,
+          bool FineInKey = false>
 struct Walk {
   static_assert(K >= 2 && K <= 4);
   static constexpr auto subsets = subsimplices<Dim + 1, K>();
@@ -237,7 +245,10 @@ struct Walk {
   static constexpr std::size_t kBucketEntries = 16384;
   static constexpr std::size_t kBlock = 16;               // coarse buckets per visitor (see chunk)
   static constexpr std::size_t kCellsPerThread = 1 << 16; // fewer cells: fewer threads
-  using Packed = UIntFor<kIdBits *(K - 1) + kRefBits>;
+  static_assert(!FineInKey || SideOnly);
+  // FineInKey: where an entry's place in its coarse bucket starts.
+  static constexpr int kFineShift = kIdBits * (K - 1) + kRefBits;
+  using Packed = UIntFor<FineInKey ? 64 : kIdBits *(K - 1) + kRefBits>;
   using Buffer = std::vector<Packed, UninitialisedAllocator<Packed>>;
   using Fine = std::vector<std::uint16_t, UninitialisedAllocator<std::uint16_t>>;
   // A chunk's entries and each entry's smallest id within its coarse bucket,
@@ -277,15 +288,30 @@ struct Walk {
 
   std::size_t part_begin(int t) const { return mesh.num_cells() * std::size_t(t) / parts; }
 
+  // The coarse buckets' width: 2^shift ids.
+  static int shift_for(std::size_t nv, std::size_t nc) {
+    const std::size_t buckets = std::max(kStreams, nc * std::size_t(M) / kBucketEntries);
+    int shift = 0;
+    while (shift < 16 && (nv >> shift) > buckets)
+      ++shift;
+    return shift;
+  }
+
+  // Whether the mesh's ids fit this walk's packing (FineInKey: with room
+  // for the place in the coarse bucket above them).
+  static bool fits(std::size_t nv, std::size_t nc) {
+    if (nv >= (std::size_t(1) << kIdBits))
+      return false;
+    return !FineInKey || kFineShift + shift_for(nv, nc) <= 64;
+  }
+
   Walk(const Mesh &mesh_, const std::vector<std::int8_t> *signs_) : mesh(mesh_), signs(signs_) {
     const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
     if (nc * M >= std::size_t(kSideBit))
       throw ResourceError("", "mesh too large for the 32-bit sub-simplex references of the checks");
-    if (SideOnly && nv >= (std::size_t(1) << kIdBits))
-      throw ResourceError("", "mesh too large for the 31-bit vertex ids of the final check");
-    const std::size_t buckets = std::max(kStreams, nc * std::size_t(M) / kBucketEntries);
-    while (shift < 16 && (nv >> shift) > buckets)
-      ++shift;
+    if (SideOnly && !fits(nv, nc))
+      throw ResourceError("", "mesh too large for the vertex ids of the final check");
+    shift = shift_for(nv, nc);
     const std::size_t coarse = nv ? ((nv - 1) >> shift) + 1 : 0;
     parts = int(std::clamp<std::size_t>(nc / kCellsPerThread, 1, std::size_t(threads())));
     counts.assign(std::size_t(parts) * coarse, 0);
@@ -332,8 +358,9 @@ struct Walk {
   // How many entries a buffer budget of `bytes` holds (a test's budget,
   // when set, instead).
   static std::size_t entries_in(std::size_t bytes) {
-    return std::max<std::size_t>(
-        (g_chunk_bytes ? g_chunk_bytes : bytes) / (sizeof(Packed) + sizeof(std::uint16_t)), 1);
+    return std::max<std::size_t>((g_chunk_bytes ? g_chunk_bytes : bytes) /
+                                     (sizeof(Packed) + (FineInKey ? 0 : sizeof(std::uint16_t))),
+                                 1);
   }
 
   // The buffers for the largest of `chunks`.
@@ -343,7 +370,7 @@ struct Walk {
       most = std::max(most, start[b1] - start[b0]);
     Buffers buffers;
     buffers.packed.reserve(most);
-    if (shift)
+    if (shift && !FineInKey)
       buffers.fine.reserve(most);
     if (K == Dim && WithRefs && chunks.size() > 1 && chunks.size() < 256) {
       buffers.pairs.resize(2 * mesh.num_cells());
@@ -404,6 +431,14 @@ struct Walk {
   // a coarse bucket's facets matched by hashing, in the cache, instead of
   // the fine scatter and sorts. A stamp per slot marks the bucket that
   // filled it, so the table is never cleared.
+  // FineInKey: an entry's place in its coarse bucket.
+  static std::uint16_t fine_of(Packed p) {
+    if constexpr (FineInKey)
+      return std::uint16_t(p >> kFineShift);
+    else
+      return 0;
+  }
+
   struct MatchSlot {
     Packed ids;          // the packed facet without its side bit
     std::uint32_t stamp; // the bucket that filled the slot (0: none yet)
@@ -456,7 +491,9 @@ struct Walk {
     std::size_t fills = 0;
     auto slot_of = [&](std::size_t i) {
       const Packed key = ids[i] >> 1;
-      std::uint64_t h = std::uint64_t(key) ^ (std::uint64_t(fine[i]) << 48);
+      std::uint64_t h = std::uint64_t(key);
+      if constexpr (!FineInKey)
+        h ^= std::uint64_t(fine[i]) << 48;
       if constexpr (sizeof(Packed) > 8)
         h ^= std::uint64_t(key >> 64);
       h ^= h >> 33;
@@ -472,7 +509,7 @@ struct Walk {
     for (std::size_t i = 0; i < n; ++i) {
       const Packed key = ids[i] >> 1;
       const std::uint8_t side = std::uint8_t(ids[i] & 1u);
-      const std::uint16_t f = fine[i];
+      const std::uint16_t f = FineInKey ? 0 : fine[i];
       std::size_t at = ring[i % kAhead];
       if (i + kAhead < n) {
         const std::size_t next = slot_of(i + kAhead);
@@ -506,7 +543,8 @@ struct Walk {
     for (std::size_t k = 0; k < fills; ++k) {
       const MatchSlot &slot = slots[filled[k]];
       if (slot.copies == 1)
-        singles.emplace_back(slot.fine, Packed((slot.ids << 1) | slot.side));
+        singles.emplace_back(FineInKey ? fine_of(slot.ids << 1) : slot.fine,
+                             Packed((slot.ids << 1) | slot.side));
     }
     std::sort(singles.begin() + std::ptrdiff_t(first), singles.end());
     return true;
@@ -532,28 +570,40 @@ struct Walk {
     std::size_t pairs = 0;
     singles.clear();
     if (split == 0) {
-      if (!match_range(buffer.data() + lo, fine.data() + lo, n, table, singles, pairs))
+      if (!match_range(buffer.data() + lo, FineInKey ? nullptr : fine.data() + lo, n, table,
+                       singles, pairs))
         return false;
     } else {
       const int down = shift - split;
       const std::size_t pieces = std::size_t(1) << split;
       table.count.assign(pieces + 1, 0);
-      for (std::size_t i = lo; i < hi; ++i)
-        ++table.count[(fine[i] >> down) + 1];
+      if constexpr (FineInKey) {
+        for (std::size_t i = lo; i < hi; ++i)
+          ++table.count[(buffer[i] >> (kFineShift + down)) + 1];
+      } else {
+        for (std::size_t i = lo; i < hi; ++i)
+          ++table.count[(fine[i] >> down) + 1];
+      }
       for (std::size_t q = 1; q <= pieces; ++q)
         table.count[q] += table.count[q - 1];
       table.ids.resize(n);
-      table.fine.resize(n);
-      for (std::size_t i = lo; i < hi; ++i) {
-        const std::uint32_t at = table.count[fine[i] >> down]++;
-        table.ids[at] = buffer[i];
-        table.fine[at] = fine[i];
+      if constexpr (FineInKey) {
+        for (std::size_t i = lo; i < hi; ++i)
+          table.ids[table.count[buffer[i] >> (kFineShift + down)]++] = buffer[i];
+      } else {
+        table.fine.resize(n);
+        for (std::size_t i = lo; i < hi; ++i) {
+          const std::uint32_t at = table.count[fine[i] >> down]++;
+          table.ids[at] = buffer[i];
+          table.fine[at] = fine[i];
+        }
       }
       // count[q] is now the end of piece q.
       for (std::size_t q = 0, from = 0; q < pieces; ++q) {
         const std::size_t to = table.count[q];
-        if (to > from && !match_range(table.ids.data() + from, table.fine.data() + from, to - from,
-                                      table, singles, pairs))
+        if (to > from &&
+            !match_range(table.ids.data() + from, FineInKey ? nullptr : table.fine.data() + from,
+                         to - from, table, singles, pairs))
           return false;
         from = to;
       }
@@ -590,7 +640,7 @@ struct Walk {
     Buffer &buffer = buffers.packed;
     Fine &fine = buffers.fine;
     buffer.resize(start[b1] - base);
-    fine.resize(shift ? buffer.size() : 0);
+    fine.resize(shift && !FineInKey ? buffer.size() : 0);
 #pragma omp parallel for num_threads(parts) schedule(static, 1)
     for (int t = 0; t < parts; ++t) {
       std::vector<std::size_t> cursor(b1 - b0);
@@ -640,31 +690,42 @@ struct Walk {
           // id's bucket, facets 1..Dim side by side to the smallest's.
           if (ids[1] >= lo_v && ids[1] < hi_v) {
             const std::size_t at = cursor[(ids[1] >> shift) - b0]++;
-            buffer[at] = facet(0);
-            if (shift)
-              fine[at] = std::uint16_t(ids[1] & mask);
+            if constexpr (FineInKey) {
+              buffer[at] = facet(0) | (Packed(ids[1] & mask) << kFineShift);
+            } else {
+              buffer[at] = facet(0);
+              if (shift)
+                fine[at] = std::uint16_t(ids[1] & mask);
+            }
           }
           if (ids[0] >= lo_v && ids[0] < hi_v) {
             std::size_t &end = cursor[(ids[0] >> shift) - b0];
             const std::size_t at = end;
             end += Dim;
-            for (int k = 1; k <= Dim; ++k) {
-              buffer[at + k - 1] = facet(k);
-              if (shift)
-                fine[at + k - 1] = std::uint16_t(ids[0] & mask);
+            if constexpr (FineInKey) {
+              const Packed high = Packed(ids[0] & mask) << kFineShift;
+              for (int k = 1; k <= Dim; ++k)
+                buffer[at + k - 1] = facet(k) | high;
+            } else {
+              for (int k = 1; k <= Dim; ++k) {
+                buffer[at + k - 1] = facet(k);
+                if (shift)
+                  fine[at + k - 1] = std::uint16_t(ids[0] & mask);
+              }
             }
           }
           continue;
         }
-        for (int m = 0; m < M; ++m) {
-          const VertexId low = min_of(cell, m);
-          if (low < lo_v || low >= hi_v)
-            continue;
-          const std::size_t at = cursor[(low >> shift) - b0]++;
-          buffer[at] = pack(cell, c, m, key);
-          if (shift)
-            fine[at] = std::uint16_t(low & mask);
-        }
+        if constexpr (!FineInKey)
+          for (int m = 0; m < M; ++m) {
+            const VertexId low = min_of(cell, m);
+            if (low < lo_v || low >= hi_v)
+              continue;
+            const std::size_t at = cursor[(low >> shift) - b0]++;
+            buffer[at] = pack(cell, c, m, key);
+            if (shift)
+              fine[at] = std::uint16_t(low & mask);
+          }
       }
     }
     const std::size_t k0 = b0 / kBlock, k1 = (b1 - 1) / kBlock + 1;
@@ -693,14 +754,20 @@ struct Walk {
             if (!g_sorted_final_walk &&
                 match_bucket(b, lo, hi, buffer, fine, table, singles, visit))
               continue;
+          auto fine_at = [&](std::size_t i) {
+            if constexpr (FineInKey)
+              return fine_of(buffer[i]);
+            else
+              return fine[i];
+          };
           std::fill(count.begin(), count.end(), 0);
           for (std::size_t i = lo; i < hi; ++i)
-            ++count[fine[i] + 1];
+            ++count[fine_at(i) + 1];
           for (std::size_t f = 1; f < count.size(); ++f)
             count[f] += count[f - 1];
           scratch.resize(hi - lo);
           for (std::size_t i = lo; i < hi; ++i)
-            scratch[count[fine[i]]++] = buffer[i];
+            scratch[count[fine_at(i)]++] = buffer[i];
           // count[f] is now the end of fine bucket f (and the start of f + 1).
           std::size_t from = 0;
           for (std::size_t f = 0; f <= mask && from < scratch.size(); ++f) {
@@ -756,12 +823,12 @@ void for_each_subsimplex(const Mesh &mesh, Visit &&visit,
 // the caller combines the visitors' results in index order, which gives the
 // same result for every thread count.
 template <int Dim, int K, bool WithRefs = true, bool SideOnly = false,
-          int IdBits = SideOnly ? 31 : 32, class Visitor>
+          int IdBits = SideOnly ? 31 : 32, bool FineInKey = false, class Visitor>
 void for_each_subsimplex_blocks(const Mesh &mesh, const Visitor &prototype,
                                 std::vector<Visitor> &visitors,
                                 const std::vector<std::int8_t> *signs = nullptr,
                                 std::size_t chunk_bytes = kChunkBytes) {
-  using W = Walk<Dim, K, WithRefs, SideOnly, IdBits>;
+  using W = Walk<Dim, K, WithRefs, SideOnly, IdBits, FineInKey>;
   const W walk(mesh, signs);
   visitors.assign((walk.start.size() - 1 + W::kBlock - 1) / W::kBlock, prototype);
   const auto chunks = walk.chunks(W::entries_in(chunk_bytes));
@@ -1068,11 +1135,11 @@ template <int Dim, bool SideOnly> struct FacetVisitor {
 
 // With `interior`, the facets shared by two cells are recorded there
 // (InteriorFacets in check.hpp), one piece per block of the walk.
-template <int Dim, bool SideOnly = false, int IdBits = SideOnly ? 31 : 32>
+template <int Dim, bool SideOnly = false, int IdBits = SideOnly ? 31 : 32, bool FineInKey = false>
 FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs, bool keep_boundary,
                        InteriorFacets *interior = nullptr, std::size_t chunk_bytes = kChunkBytes) {
   std::vector<FacetVisitor<Dim, SideOnly>> parts;
-  for_each_subsimplex_blocks<Dim, Dim, true, SideOnly, IdBits>(
+  for_each_subsimplex_blocks<Dim, Dim, true, SideOnly, IdBits, FineInKey>(
       mesh, FacetVisitor<Dim, SideOnly>{&mesh, signs, keep_boundary, {}, interior != nullptr},
       parts, signs, chunk_bytes);
   if (interior) {
@@ -2205,26 +2272,38 @@ CheckResult check_conformity(const Mesh &mesh, const Invariants *original,
   });
 }
 
-// The final check's facet walk: 4D facets pack three ids and the side bit
-// into 64 bits while ids fit in 21 bits (meshes below 2,097,152 vertices),
-// else into 128; half the buffer and hash table.
+// The final check's facet walk. An entry packs the facet's ids after the
+// smallest and the side bit, and where it can also the smallest id's place
+// in its coarse bucket (FineInKey), in 64 bits: 4D while ids fit in 18
+// bits (below 262,144 vertices, about 5.5 M pentatopes), 3D in 24 (below
+// 16,777,216 vertices): 8 bytes an entry. Otherwise 4D packs three 21-bit
+// ids (below 2,097,152 vertices) in 64 bits and larger ids in 128, 3D two
+// 31-bit ids in 64, each with the 2-byte place beside it.
 //
-// Its buffer holds a little over half the mesh's facet entries (10 bytes
-// each, D + 1 per cell: 22 bytes per tet, about the size of the cells' own
-// arrays), so that the walk takes two chunks; at least 16 and at most 160
-// MiB. 3D, 3,178,142 tets: 70 MB, below the last iteration's peak. 4D,
-// 5,233,296 pentatopes: 144 MB, two chunks instead of three at the former
-// 96 MiB; the check and the write then set the run's peak, 315 MB (62
-// bytes per pentatope) against the last iteration's 276.
+// Its buffer holds a little over half the mesh's facet entries (D + 1 per
+// cell; 8 or 10 bytes each: 18-22 bytes per tet, about the size of the
+// cells' own arrays), so that the walk takes two chunks; at least 16 and at
+// most 160 MiB. 3D, 3,178,142 tets: 56 MB, below the last iteration's
+// peak. 4D, 5,233,296 pentatopes: 115 MB (144 before FineInKey).
 template <int D>
 static FacetReport final_facet_pass(const Mesh &mesh, const std::vector<std::int8_t> &signs) {
+  const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
   // (A little over half: chunks end at bucket boundaries.)
-  const std::size_t bytes = std::clamp(mesh.num_cells() * std::size_t(D + 1) * 11 / 2,
-                                       std::size_t(16) << 20, std::size_t(160) << 20);
-  if constexpr (D == 4)
-    if (mesh.num_vertices() < (std::size_t(1) << 21))
-      return facet_pass<D, true, 21>(mesh, &signs, true, nullptr, bytes);
-  return facet_pass<D, true>(mesh, &signs, true, nullptr, bytes);
+  auto budget = [&](std::size_t entry_bytes) {
+    return std::clamp(nc * std::size_t(D + 1) * entry_bytes * 11 / 20, std::size_t(16) << 20,
+                      std::size_t(160) << 20);
+  };
+  if constexpr (D == 3) {
+    if (!g_wide_final_walk && Walk<3, 3, true, true, 24, true>::fits(nv, nc))
+      return facet_pass<D, true, 24, true>(mesh, &signs, true, nullptr, budget(8));
+  }
+  if constexpr (D == 4) {
+    if (!g_wide_final_walk && Walk<4, 4, true, true, 18, true>::fits(nv, nc))
+      return facet_pass<D, true, 18, true>(mesh, &signs, true, nullptr, budget(8));
+    if (nv < (std::size_t(1) << 21))
+      return facet_pass<D, true, 21>(mesh, &signs, true, nullptr, budget(10));
+  }
+  return facet_pass<D, true>(mesh, &signs, true, nullptr, budget(D == 4 ? 18 : 10));
 }
 
 CheckResult check_refined(const Mesh &mesh, const Invariants &original) {
@@ -2391,5 +2470,8 @@ void set_final_walk_piece(std::size_t entries) {
 
 void use_sorted_final_walk(bool on) {
   g_sorted_final_walk = on;
+}
+void use_wide_final_walk(bool on) {
+  g_wide_final_walk = on;
 }
 } // namespace bisect::testing

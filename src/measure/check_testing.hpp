@@ -19,4 +19,9 @@ void set_final_walk_piece(std::size_t entries);
 // the final check); a small one splits test meshes into several chunks.
 void set_walk_chunk_bytes(std::size_t bytes);
 
+// With `on`, the final check never packs a facet's place in its coarse
+// bucket into its entry (FineInKey, see final_facet_pass in check.cpp) and
+// takes the wider packing it uses for larger meshes instead.
+void use_wide_final_walk(bool on);
+
 } // namespace bisect::testing

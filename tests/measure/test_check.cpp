@@ -635,17 +635,22 @@ TEST_CASE("final check: matching facets by hashing gives the sorted walk's verdi
       // facets (what a 4D mesh of millions of cells does with 2,048), and
       // the sorted walk.
       // Each also in chunks of 64 KiB (tens of chunks, the per-cell chunk
-      // pairs in use) as well as in one.
+      // pairs in use) as well as in one; and each with the place in the
+      // coarse bucket packed into the entries (what these small meshes get)
+      // and beside them (what meshes of many vertices get).
       for (int way : {0, 1, 2})
         for (std::size_t chunk : {std::size_t(0), std::size_t(64) << 10})
-          for (int t : {1, 2, 3}) {
-            testing::use_sorted_final_walk(way == 2);
-            testing::set_final_walk_piece(way == 1 ? 16 : std::size_t(1) << 30);
-            testing::set_walk_chunk_bytes(chunk);
-            set_threads(t);
-            const CheckResult r = check_refined(mesh, original);
-            verdicts.push_back(r.ok ? "ok" : r.failure);
-          }
+          for (bool wide : {false, true})
+            for (int t : wide ? std::vector<int>{2} : std::vector<int>{1, 2, 3}) {
+              testing::use_sorted_final_walk(way == 2);
+              testing::set_final_walk_piece(way == 1 ? 16 : std::size_t(1) << 30);
+              testing::set_walk_chunk_bytes(chunk);
+              testing::use_wide_final_walk(wide);
+              set_threads(t);
+              const CheckResult r = check_refined(mesh, original);
+              verdicts.push_back(r.ok ? "ok" : r.failure);
+            }
+      testing::use_wide_final_walk(false);
       testing::use_sorted_final_walk(false);
       testing::set_final_walk_piece(0);
       testing::set_walk_chunk_bytes(0);
