@@ -124,6 +124,14 @@ void add_format_option(CLI::App *cmd, std::string &format) {
       ->check(CLI::IsMember({"vtu", "msh"}));
 }
 
+void add_origin_array(Mesh &mesh) {
+  std::erase_if(mesh.cell_data, [](const DataArray &d) { return d.name == kOriginArray; });
+  DataArray origin{kOriginArray, 1, std::vector<double>(mesh.num_cells()), ValueType::Int32};
+  for (std::size_t c = 0; c < mesh.num_cells(); ++c)
+    origin.values[c] = double(c);
+  mesh.cell_data.push_back(std::move(origin));
+}
+
 void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions &options) {
   write_mesh_file_with_state(outputs.file(h), outputs.name(h), mesh, options);
 }

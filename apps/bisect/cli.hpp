@@ -64,6 +64,11 @@ void write_text_file(const std::string &file, const std::string &name, const std
 // Refuses an output name that ends in neither .vtu nor .msh (any case).
 void check_extension(const std::string &out);
 
+// --origin: the cell array bisect:origin, each cell's own index (children
+// inherit cell arrays, so after refining it names the input cell each cell
+// descends from); a previous run's is replaced.
+void add_origin_array(Mesh &mesh);
+
 // Writes `mesh` with its bisection state into output `h` of `outputs`.
 void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions &options = {});
 

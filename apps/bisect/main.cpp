@@ -23,6 +23,9 @@ std::atomic<bool> g_interrupted{false};
 // Under mpirun only rank 0 speaks (README, "MPI"): when one rank fails,
 // mpirun ends the others with a signal, which they take silently.
 bool g_silent_signals = false;
+// A rank other than 0 under mpirun: the usage and input errors every rank
+// finds alike are printed by rank 0 alone.
+bool g_other_rank = false;
 
 // SIGINT, SIGTERM, SIGHUP: before the outputs are committed nothing of the
 // run's result exists but temporary files, so they are removed and the
@@ -43,7 +46,7 @@ extern "C" void on_signal(int) {
 void install_signal_handlers() {
   for (const char *v : {"OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK"})
     if (const char *rank = std::getenv(v); rank && std::string(rank) != "0")
-      g_silent_signals = true;
+      g_silent_signals = g_other_rank = true;
   struct sigaction sa {};
   sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
@@ -58,6 +61,14 @@ void install_signal_handlers() {
 } // namespace
 
 int run(int argc, char **argv);
+
+namespace {
+// A stream that writes nowhere.
+std::ostream &discard() {
+  static std::ostream none(nullptr);
+  return none;
+}
+} // namespace
 
 int main(int argc, char **argv) {
 #ifdef BISECT_MPI
@@ -106,6 +117,8 @@ int run(int argc, char **argv) {
       names += (names.empty() ? "" : ", ") + sub->get_name();
       known |= argc > 1 && sub->get_name() == argv[1];
     }
+    if (g_other_rank)
+      return kExitInput;
     if (argc > 1 && argv[1][0] != '-' && !known) {
       std::cerr << "bisect: unknown command '" << argv[1] << "' (commands: " << names << ")\n";
       return kExitInput;
@@ -119,17 +132,19 @@ int run(int argc, char **argv) {
       if (*c.app)
         return c.run();
   } catch (const Error &e) {
+    // (Every rank meets these alike: rank 0 speaks for all.)
+    std::ostream &err = g_other_rank ? discard() : std::cerr;
     switch (e.kind) {
     case ErrorKind::Check:
-      std::cerr << "bisect: internal check failed: " << one_line(e.what()) << "\n";
+      err << "bisect: internal check failed: " << one_line(e.what()) << "\n";
       return kExitCheck;
     case ErrorKind::Limit:
-      std::cerr << "bisect: " << one_line(e.what()) << "\n";
+      err << "bisect: " << one_line(e.what()) << "\n";
       return kExitLimit;
     case ErrorKind::Input:
     case ErrorKind::Usage:
     case ErrorKind::Resource:
-      std::cerr << "bisect: " << one_line(e.what()) << "\n";
+      err << "bisect: " << one_line(e.what()) << "\n";
       return kExitInput;
     }
   } catch (const std::bad_alloc &) {

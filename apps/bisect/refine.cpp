@@ -72,19 +72,23 @@ int run_refine(const RefineArgs &a) {
 #ifdef BISECT_MPI
   // Under mpirun, or for a .pvtu: the distributed refine (README, "MPI").
   if (mpi_world_size() > 1 || a.output.ends_with(".pvtu")) {
-    if (!a.slices.empty() || a.output == "-" || !a.format.empty() || a.origin)
-      throw UsageError("distributed refine (mpirun or a .pvtu output) takes --region, "
-                       "--indicator with its rule, --depth, --iterations, --marking, "
-                       "--max-elements, --max-memory, --check, --compression, --quality-csv, "
-                       "--force, --quiet and --json; --slices, --origin, --format and -o - "
-                       "need a serial run");
     if (a.output.empty())
       throw UsageError("distributed refine needs -o (a .pvtu, or a .vtu/.msh to gather into)");
+    if (!a.slices.empty() && a.output.ends_with(".pvtu"))
+      throw UsageError("--slices with a .pvtu output: cut the pieces afterwards (bisect slice " +
+                       a.output + " --t T -o SECTION.vtu), or gather into a .vtu under mpirun");
+    if (!a.format.empty() && a.output.ends_with(".pvtu"))
+      throw UsageError("--format with a .pvtu output: the pieces are .vtu");
     DistributedArgs d;
     d.input = a.input;
     d.region = a.region;
-    d.output = a.output;
-    d.csv = !a.csv.empty() ? a.csv : default_csv(a.output);
+    // -o -: gathered and written to standard output by rank 0 (no CSV
+    // unless asked for), as the serial run does.
+    d.output = output_name(a.output, a.format, a.flags.json);
+    d.format = a.format;
+    d.csv = !a.csv.empty() ? a.csv : a.output == "-" ? "none" : default_csv(a.output);
+    d.origin = a.origin;
+    d.slices = a.slices;
     d.iterations = a.iterations;
     d.depth = a.depth;
     d.indicator = a.indicator;
@@ -141,15 +145,8 @@ int run_refine(const RefineArgs &a) {
   check_output_format(out, mesh.dim, a.format);
   if (!a.slices.empty() && mesh.dim < 3)
     throw UsageError("--slices needs a 3D (2D+t) or 4D mesh; " + a.input + " is 2D");
-  if (a.origin) {
-    // bisect:origin: the input cell each output cell descends from (children
-    // inherit cell arrays); a previous run's is replaced.
-    std::erase_if(mesh.cell_data, [](const DataArray &d) { return d.name == kOriginArray; });
-    DataArray origin{kOriginArray, 1, std::vector<double>(mesh.num_cells()), ValueType::Int32};
-    for (std::size_t c = 0; c < mesh.num_cells(); ++c)
-      origin.values[c] = double(c);
-    mesh.cell_data.push_back(std::move(origin));
-  }
+  if (a.origin)
+    add_origin_array(mesh);
   std::unique_ptr<Region> region;
   if (!a.region.empty())
     region = read_region(a.region, mesh.dim);

@@ -14,7 +14,10 @@ namespace bisect {
 // pentatopes through their edge (or, for a vertex on the hyperplane, through
 // the vertex), and every cut polytope (tetrahedron, square pyramid or
 // triangular prism) is split by the pulling triangulation from its
-// smallest-key vertex, which agrees on every shared face. Pentatopes touching
+// smallest-key vertex, which agrees on every shared face. A cut point's key
+// is its edge's two ends, ranked by their coordinates (lexicographically),
+// and it is interpolated from the lower-ranked end: the section depends on
+// the cells alone, not on the vertices' numbering. Pentatopes touching
 // the hyperplane only in a vertex, edge or triangle contribute nothing; a
 // tetrahedral facet lying in the hyperplane is produced once (from the
 // pentatope on the side x >= value when there is one). Tets are positively

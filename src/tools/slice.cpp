@@ -10,8 +10,13 @@
 //   sides (-,0,+) = (1,0,4) or (4,0,1), (1,1,3), (2,2,1), (1,3,1) ...  tetrahedron
 //                   (2,1,2)                                            square pyramid
 //                   (2,0,3) or (3,0,2)                                 triangular prism
-// A cut point is keyed by the sorted vertex-id pair of its edge, (v, v) for a
-// vertex v on the plane; keys are global, so neighbours share cut points.
+// A cut point is keyed by the sorted vertex-rank pair of its edge, (v, v)
+// for a vertex v on the plane; keys are global, so neighbours share cut
+// points. A vertex's rank is its place in the lexicographic order of the
+// coordinates of the vertices of the cells that meet the plane: the section
+// (its cells, and each cut point interpolated from the edge's lower-ranked
+// end) depends on the mesh's cells alone, not on how its vertices are
+// numbered, so a mesh gathered from MPI parts gives the serial run's.
 //
 // Each polytope is cut into tets by the pulling triangulation: take its
 // smallest-key vertex v, triangulate recursively every facet not containing
@@ -44,7 +49,7 @@
 namespace bisect {
 namespace {
 
-using Key = std::uint64_t; // (smaller id << 32) | larger id
+using Key = std::uint64_t; // (smaller rank << 32) | larger rank
 using Tet = std::array<Key, 4>;
 
 Key point_key(VertexId a, VertexId b) {
@@ -59,7 +64,8 @@ VertexId key_second(Key k) {
   return VertexId(k & 0xffffffffu);
 }
 
-// One cell (pentatope or tet): its global ids and the side of each vertex.
+// One cell (pentatope or tet): its vertices' ranks (kNoVertex for a cell
+// that does not meet the plane) and the side of each vertex.
 struct Pentatope {
   int n = 5; // vertices
   std::array<VertexId, 5> ids{};
@@ -133,12 +139,53 @@ std::vector<std::vector<Key>> pulling(const Pentatope &p, unsigned mask, int k) 
   return out;
 }
 
-Pentatope classify(const Mesh &mesh, CellId c, int axis, double value) {
+// The ranks of the vertices of the cells that meet the plane (a vertex on
+// it, or one on each side), and the vertex of each rank.
+struct Ranks {
+  std::vector<VertexId> of;     // per vertex of the mesh; kNoVertex when unranked
+  std::vector<VertexId> vertex; // per rank
+};
+
+bool meets(const Mesh &mesh, CellId c, int axis, double value) {
+  bool below = false, above = false;
+  for (int i = 0; i <= mesh.dim; ++i) {
+    const double x = mesh.point(mesh.cell(c)[i])[axis];
+    below |= x <= value;
+    above |= x >= value;
+  }
+  return below && above;
+}
+
+Ranks rank_vertices(const Mesh &mesh, int axis, double value) {
+  Ranks r;
+  r.of.assign(mesh.num_vertices(), kNoVertex);
+  for (std::size_t c = 0; c < mesh.num_cells(); ++c)
+    if (meets(mesh, CellId(c), axis, value))
+      for (int i = 0; i <= mesh.dim; ++i)
+        if (r.of[mesh.cell(CellId(c))[i]] == kNoVertex) {
+          r.of[mesh.cell(CellId(c))[i]] = 0;
+          r.vertex.push_back(mesh.cell(CellId(c))[i]);
+        }
+  const int d = mesh.dim;
+  std::sort(r.vertex.begin(), r.vertex.end(), [&](VertexId a, VertexId b) {
+    const double *pa = mesh.point(a), *pb = mesh.point(b);
+    for (int k = 0; k < d; ++k)
+      if (pa[k] != pb[k])
+        return pa[k] < pb[k];
+    return a < b; // coincident vertices (not in a valid mesh)
+  });
+  for (std::size_t i = 0; i < r.vertex.size(); ++i)
+    r.of[r.vertex[i]] = VertexId(i);
+  return r;
+}
+
+Pentatope classify(const Mesh &mesh, const Ranks &ranks, CellId c, int axis, double value) {
   Pentatope p;
   p.n = mesh.dim + 1;
   for (int i = 0; i < p.n; ++i) {
-    p.ids[i] = mesh.cell(c)[i];
-    const double x = mesh.point(p.ids[i])[axis];
+    const VertexId v = mesh.cell(c)[i];
+    p.ids[i] = ranks.of[v];
+    const double x = mesh.point(v)[axis];
     p.side[i] = x > value ? 1 : x < value ? -1 : 0;
   }
   return p;
@@ -151,12 +198,12 @@ int count_side(const Pentatope &p, int s) {
 // For every facet lying in the plane, the cell that produces it: one on the
 // side x >= value when there is one. (Facets of a tet mesh have 3 vertices;
 // the unused fourth slot stays kNoVertex.)
-std::map<std::array<VertexId, 4>, CellId> in_plane_owners(const Mesh &mesh, int axis,
-                                                          double value) {
+std::map<std::array<VertexId, 4>, CellId> in_plane_owners(const Mesh &mesh, const Ranks &ranks,
+                                                          int axis, double value) {
   std::map<std::array<VertexId, 4>, CellId> owner;
   std::map<std::array<VertexId, 4>, bool> owner_above;
   for (std::size_t c = 0; c < mesh.num_cells(); ++c) {
-    const Pentatope p = classify(mesh, CellId(c), axis, value);
+    const Pentatope p = classify(mesh, ranks, CellId(c), axis, value);
     if (count_side(p, 0) != p.n - 1)
       continue;
     std::array<VertexId, 4> facet{kNoVertex, kNoVertex, kNoVertex, kNoVertex};
@@ -177,9 +224,9 @@ std::map<std::array<VertexId, 4>, CellId> in_plane_owners(const Mesh &mesh, int 
 
 // The section simplices of cell c (tets of a pentatope, triangles of a tet;
 // a triangle's fourth key unused), as cut-point keys.
-std::vector<Tet> cut_cell(const Mesh &mesh, CellId c, int axis, double value,
+std::vector<Tet> cut_cell(const Mesh &mesh, const Ranks &ranks, CellId c, int axis, double value,
                           const std::map<std::array<VertexId, 4>, CellId> &owners) {
-  const Pentatope p = classify(mesh, c, axis, value);
+  const Pentatope p = classify(mesh, ranks, c, axis, value);
   const int k = p.n - 2; // dimension of the section
   std::vector<Tet> tets;
   if (crosses(p, p.all())) {
@@ -208,6 +255,7 @@ std::vector<Tet> cut_cell(const Mesh &mesh, CellId c, int axis, double value,
 // point, interpolated along its edge (computed once per key).
 struct VertexMaker {
   const Mesh &in;
+  const Ranks &ranks;
   Mesh &out;
   int axis;
   double value;
@@ -221,9 +269,9 @@ struct VertexMaker {
   }
 
   void add(Key k) {
-    const VertexId a = key_first(k), b = key_second(k);
+    const VertexId a = ranks.vertex[key_first(k)], b = ranks.vertex[key_second(k)];
     const double *pa = in.point(a), *pb = in.point(b);
-    // Parameter along a -> b (a < b) where x[axis] reaches the value.
+    // Parameter along a -> b (a ranked below b) where x[axis] reaches the value.
     const double lambda = a == b ? 0.0 : (value - pa[axis]) / (pb[axis] - pa[axis]);
     for (int d = 0; d < in.dim; ++d)
       if (d != axis)
@@ -282,11 +330,12 @@ Mesh slice_mesh(const Mesh &mesh4, int axis, double value) {
   for (const DataArray &a : mesh4.point_data)
     out.point_data.push_back({a.name, a.components, {}});
 
-  const auto owners = in_plane_owners(mesh4, axis, value);
-  VertexMaker maker{mesh4, out, axis, value, {}};
+  const Ranks ranks = rank_vertices(mesh4, axis, value);
+  const auto owners = in_plane_owners(mesh4, ranks, axis, value);
+  VertexMaker maker{mesh4, ranks, out, axis, value, {}};
   std::vector<CellId> parent;
   for (std::size_t c = 0; c < mesh4.num_cells(); ++c) {
-    for (const Tet &t : cut_cell(mesh4, CellId(c), axis, value, owners)) {
+    for (const Tet &t : cut_cell(mesh4, ranks, CellId(c), axis, value, owners)) {
       std::array<VertexId, 4> ids{kNoVertex, kNoVertex, kNoVertex, kNoVertex};
       for (int i = 0; i <= out.dim; ++i)
         ids[i] = maker.get(t[i]);

@@ -136,14 +136,18 @@ int run_refine_mpi(const DistributedArgs &a) {
   Invariants original;
   std::unique_ptr<OutputSet> outputs;
   int h_mesh = -1, h_csv = -1;
+  std::vector<int> h_slices;
   const int failure = on_rank_zero(rank, [&] {
     if (!pvtu) {
-      check_extension(a.output);
+      if (a.format.empty())
+        check_extension(a.output);
       std::vector<std::string> inputs{a.input};
       if (!a.region.empty())
         inputs.push_back(a.region);
       outputs = std::make_unique<OutputSet>(inputs, a.force);
       h_mesh = outputs->add(a.output);
+      for (double t : a.slices)
+        h_slices.push_back(outputs->add(slice_path(a.output, "t", t)));
     } else {
       outputs = std::make_unique<OutputSet>(a.region.empty()
                                                 ? std::vector<std::string>{a.input}
@@ -154,7 +158,12 @@ int run_refine_mpi(const DistributedArgs &a) {
       h_csv = outputs->add(a.csv);
     mesh = load_for_refinement(a.input, a.marking, quiet);
     if (!pvtu)
-      check_output_format(a.output, mesh.dim);
+      check_output_format(a.output, mesh.dim, a.format);
+    if (!a.slices.empty() && mesh.dim < 3)
+      throw UsageError("--slices needs a 3D (2D+t) or 4D mesh; " + a.input + " is 2D");
+    // Cell arrays travel with their cells and pass to their children.
+    if (a.origin)
+      add_origin_array(mesh);
     if (!a.region.empty())
       (void)read_region(a.region, mesh.dim);
     original = measure_invariants(mesh, false);
@@ -357,6 +366,8 @@ int run_refine_mpi(const DistributedArgs &a) {
     const auto t_write = std::chrono::steady_clock::now();
     WriteOptions write_options;
     write_options.compression = a.compression;
+    write_options.format = a.format;
+    std::string slice_lines;
     if (pvtu) {
       write_pvtu(a.output, d, a.force, write_options);
     }
@@ -373,10 +384,15 @@ int run_refine_mpi(const DistributedArgs &a) {
           MPI_Abort(MPI_COMM_WORLD, kExitCheck);
         }
         write_output_mesh(*outputs, h_mesh, g, write_options);
+        // Sections of the gathered mesh: the serial run's files.
+        for (std::size_t i = 0; i < a.slices.size(); ++i)
+          slice_lines += write_slice(g, g.dim - 1, a.slices[i], *outputs, h_slices[i]);
       }
     }
     if (rank == 0)
       outputs->commit();
+    if (!quiet)
+      std::cerr << slice_lines;
     const double write_seconds = seconds_since(t_write);
     double exchange_max = 0;
     MPI_Reduce(&exchange_seconds, &exchange_max, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);

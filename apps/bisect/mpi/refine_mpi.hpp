@@ -24,6 +24,9 @@ struct DistributedArgs {
   bool check = false;           // the final check across ranks after every iteration
   Compression compression = Compression::Zlib;
   bool force = false, quiet = false, json = false;
+  std::string format;         // --format (with -o -, or a name without .vtu/.msh)
+  bool origin = false;        // --origin: bisect:origin, the input cell of each cell
+  std::vector<double> slices; // --slices: sections of the gathered mesh (not with .pvtu)
 };
 
 struct DistributedCoarsenArgs {
