@@ -56,15 +56,19 @@ int run_coarsen(const CoarsenArgs &a) {
 #ifdef BISECT_MPI
   // Under mpirun, or for a .pvtu: the distributed coarsen (README, "MPI").
   if (mpi_world_size() > 1 || a.output.ends_with(".pvtu")) {
-    if (a.origin || a.output == "-" || a.input == "-" || !a.format.empty())
-      throw UsageError("distributed coarsen (mpirun or a .pvtu output) takes --region, "
-                       "--indicator with --below, --all, --passes, --sum, --check, --force, "
-                       "--quiet and --json; --origin, --format and - for a file need a serial run");
+    if (a.input == "-")
+      throw UsageError("distributed coarsen (mpirun or a .pvtu output) reads a file; - (standard "
+                       "input) needs a serial run");
     if (a.output.empty())
       throw UsageError("distributed coarsen needs -o (a .pvtu, or a .vtu/.msh to gather into)");
+    if (!a.format.empty() && a.output.ends_with(".pvtu"))
+      throw UsageError("--format with a .pvtu output: the pieces are .vtu");
     DistributedCoarsenArgs d;
     d.input = a.input;
-    d.output = a.output;
+    // -o -: gathered and written to standard output by rank 0.
+    d.output = output_name(a.output, a.format, a.flags.json);
+    d.format = a.format;
+    d.origin = a.origin;
     d.region = a.region;
     d.indicator = a.indicator;
     d.below = a.below;
@@ -106,13 +110,10 @@ int run_coarsen(const CoarsenArgs &a) {
   options.passes = a.passes;
   options.sum_arrays = a.sums;
   if (a.origin) {
-    // Each input cell's index; a parent keeps its first child's (CoarsenOptions).
-    DataArray origin{kOriginArray, 1, std::vector<double>(mesh.num_cells()), ValueType::Int32};
-    for (std::size_t c = 0; c < mesh.num_cells(); ++c)
-      origin.values[c] = double(c);
-    std::erase_if(mesh.cell_data, [](const DataArray &d) { return d.name == kOriginArray; });
-    mesh.cell_data.push_back(std::move(origin));
-    options.first_arrays.push_back(kOriginArray);
+    // Each input cell's index; a parent keeps the smaller of its children's
+    // (CoarsenOptions).
+    add_origin_array(mesh);
+    options.min_arrays.push_back(kOriginArray);
   }
   const auto on_pass = coarsen_pass_printer(a.passes, quiet);
   const CoarsenResult result = coarsen(mesh, marks, options, on_pass);

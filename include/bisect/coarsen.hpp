@@ -18,9 +18,11 @@ struct CoarsenOptions {
   // value when they agree, else their volume-weighted mean (the two children
   // of a bisection have equal volumes, so the plain mean).
   std::vector<std::string> sum_arrays;
-  // Cell arrays whose parent value is its first child's (the one with the
-  // smaller index), e.g. bisect:origin, an index into an earlier mesh.
-  std::vector<std::string> first_arrays;
+  // Cell arrays whose parent value is the smaller of its children's, e.g.
+  // bisect:origin, an index into an earlier mesh: the lowest index merged
+  // into the parent, whatever order the cells are in (a distributed
+  // coarsening gathers them in another order).
+  std::vector<std::string> min_arrays;
 };
 
 struct CoarsenPass {

@@ -49,9 +49,9 @@ public:
       return std::find(names.begin(), names.end(), name) != names.end();
     };
     for (const DataArray &a : mesh.cell_data)
-      rule_.push_back(named(options.sum_arrays, a.name)     ? Rule::Sum
-                      : named(options.first_arrays, a.name) ? Rule::First
-                                                            : Rule::Common);
+      rule_.push_back(named(options.sum_arrays, a.name)   ? Rule::Sum
+                      : named(options.min_arrays, a.name) ? Rule::Min
+                                                          : Rule::Common);
   }
 
   // A pass undoes the newest level of refinement around each vertex
@@ -615,10 +615,10 @@ private:
         const std::size_t k = std::size_t(a.components);
         for (std::size_t j = 0; j < k; ++j) {
           const double p = a.values[w * k + j], q = a.values[d * k + j];
-          a.values[w * k + j] = rule_[i] == Rule::Sum     ? p + q
-                                : rule_[i] == Rule::First ? p
-                                : p == q                  ? p
-                                                          : 0.5 * (p + q);
+          a.values[w * k + j] = rule_[i] == Rule::Sum   ? p + q
+                                : rule_[i] == Rule::Min ? std::min(p, q)
+                                : p == q                ? p
+                                                        : 0.5 * (p + q);
         }
       }
       dead_[d] = 1;
@@ -710,7 +710,7 @@ private:
   EdgeOrder order_;
   std::vector<char> &marks_;
   // How a parent's value comes from its children's (CoarsenOptions).
-  enum class Rule : std::uint8_t { Common, Sum, First };
+  enum class Rule : std::uint8_t { Common, Sum, Min };
   std::vector<Rule> rule_;                // per cell array
   std::vector<char> dead_;                // per cell, this pass: merged into its sibling's slot
   std::vector<char> eligible_;            // per vertex, this pass: may be removed

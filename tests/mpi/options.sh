@@ -77,6 +77,19 @@ for c in "cube.vtu sphere.json 5 0.2,0.6" "hypercube.vtu $R/moving-sphere.json 8
   rm -f s.t*.vtu g.t*.vtu
   n=$((n + 1))
 done
+# coarsen --origin under mpirun: the lowest input cell merged into each cell,
+# cell by cell the serial coarsen's; and -o - --format vtu (the gathered bytes).
+"$BISECT" refine cube.vtu --region sphere.json -n 5 -o r.vtu -q -f --quality-csv none
+"$BISECT" coarsen r.vtu --all -n 2 --origin -o sc.vtu -q -f
+for p in 2 3; do
+  expect_exit 0 run_mpi $p coarsen r.vtu --all -n 2 --origin -o dc.pvtu -q -f
+  /usr/bin/python3 "$same" sc.vtu dc.pvtu --array bisect:origin >same.txt ||
+    { cat same.txt >&2; fail "coarsen --origin on $p ranks differs"; }
+  n=$((n + 1))
+done
+run_mpi 2 coarsen r.vtu --all -n 2 -o dg.vtu -q -f
+expect_exit 0 run_mpi 2 coarsen r.vtu --all -n 2 -o - --format vtu -q
+cmp -s "$WORK/out" dg.vtu || fail "coarsen -o - --format vtu under mpirun differs from the gathered file"
 # Refused, one line each, nothing written: --slices of a 2D mesh, --slices
 # or --format with a .pvtu output.
 expect_exit 1 run_mpi 2 refine square.vtu --region "$R/circle.json" --slices 0.2,0.4 -o g2.vtu

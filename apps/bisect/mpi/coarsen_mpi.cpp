@@ -32,14 +32,14 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
     std::vector<std::string> inputs{a.input};
     if (!a.region.empty())
       inputs.push_back(a.region);
-    if (!pvtu)
+    if (!pvtu && a.format.empty())
       check_extension(a.output);
     outputs = std::make_unique<OutputSet>(inputs, a.force);
     if (!pvtu)
       h_mesh = outputs->add(a.output);
     mesh = load_mesh(a.input, load_progress(a.input, quiet));
     if (!pvtu)
-      check_output_format(a.output, mesh.dim);
+      check_output_format(a.output, mesh.dim, a.format);
     if (!a.region.empty())
       (void)read_region(a.region, mesh.dim);
     if (!a.indicator.empty())
@@ -49,6 +49,9 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
       throw InputError(a.input, "carries no bisection tree (bisect:generation, "
                                 "bisect:parent_a/b): nothing to coarsen");
     original = measure_invariants(mesh, a.check);
+    // The input cells' indices travel with the cells (CoarsenOptions).
+    if (a.origin)
+      add_origin_array(mesh);
     if (!quiet)
       std::cerr << "bisect: " << a.input << ": " << mesh.dim << "D, "
                 << with_commas(mesh.num_cells()) << " cells, " << with_commas(mesh.num_vertices())
@@ -79,6 +82,8 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
     CoarsenOptions options;
     options.passes = a.passes;
     options.sum_arrays = a.sums;
+    if (a.origin)
+      options.min_arrays.push_back(kOriginArray);
     const auto on_pass = coarsen_pass_printer(a.passes, quiet);
     const CoarsenResult result = coarsen(d, marks, options, on_pass);
 
@@ -110,7 +115,9 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
                     << "; no output written\n";
           bad = 1;
         } else {
-          write_output_mesh(*outputs, h_mesh, g, WriteOptions{});
+          WriteOptions write_options;
+          write_options.format = a.format;
+          write_output_mesh(*outputs, h_mesh, g, write_options);
         }
       }
       if (!bad)

@@ -35,6 +35,8 @@ struct DistributedCoarsenArgs {
   bool all = false, force = false, quiet = false, json = false, check = false;
   int passes = 1;
   std::vector<std::string> sums;
+  std::string format;  // --format (with -o -, or a name without .vtu/.msh)
+  bool origin = false; // --origin: bisect:origin, the lowest input cell merged into each cell
 };
 
 // True when mpirun (or another PMI launcher) started this process.
