@@ -245,8 +245,8 @@ for spec in ls.json lsi.json lst.json; do
   done
 done
 # Options a distributed coarsen does not take, and a mesh without a tree.
-expect_exit 1 run_mpi 2 coarsen s.vtu --all --origin -o x.pvtu -q -f
-grep -q 'need a serial run' "$WORK/err" || fail "coarsen --origin under mpirun: no clear refusal"
+expect_exit 1 run_mpi 2 coarsen - --all -o x.pvtu -q -f <s.vtu
+grep -q 'needs a serial run' "$WORK/err" || fail "coarsen of standard input under mpirun: no clear refusal"
 expect_exit 1 run_mpi 2 coarsen cube.vtu --all -o x.pvtu -f
 grep -q 'cube.vtu: carries no bisection tree' "$WORK/err" || fail "coarsen of a mesh without a tree: no clear refusal"
 [[ ! -e x.pvtu ]] || fail "a refused coarsen wrote x.pvtu"
