@@ -302,7 +302,7 @@ struct Walk {
   static bool fits(std::size_t nv, std::size_t nc) {
     if (nv >= (std::size_t(1) << kIdBits))
       return false;
-    return !FineInKey || kFineShift + shift_for(nv, nc) <= 64;
+    return !FineInKey || kFineShift + shift_for(nv, nc) <= 63; // bit 63: match_packed
   }
 
   Walk(const Mesh &mesh_, const std::vector<std::int8_t> *signs_) : mesh(mesh_), signs(signs_) {
@@ -455,7 +455,71 @@ struct Walk {
     std::vector<std::uint32_t> count;
     // The slots filled by a range, in the order filled.
     std::vector<std::uint32_t> filled;
+    // FineInKey: 8-byte slots (see match_packed), all zero between ranges.
+    std::vector<std::uint64_t> packed;
   };
+
+  // FineInKey's table: a slot is the first copy's entry itself (0: empty;
+  // a facet's key is never 0, its second id being above its first), with
+  // bit 63 set once the second copy has come. Half the bytes of a MatchSlot,
+  // so that a piece's table stays in the core's first-level cache; without
+  // stamps, the slots a range filled are cleared after it.
+  static constexpr std::uint64_t kSecondCopy = std::uint64_t(1) << 63;
+  static bool match_packed(const Packed *ids, std::size_t n, MatchTable &table,
+                           std::vector<std::pair<std::uint16_t, Packed>> &singles,
+                           std::size_t &pairs) {
+    static_assert(FineInKey && sizeof(Packed) == 8);
+    constexpr std::uint64_t kKey = ~(kSecondCopy | 1u);
+    std::size_t cap = 128;
+    while (cap < 2 * n)
+      cap *= 2;
+    if (table.packed.size() < cap)
+      table.packed.assign(cap, 0);
+    const std::size_t mask = cap - 1;
+    std::uint64_t *const slots = table.packed.data();
+    if (table.filled.size() < n)
+      table.filled.resize(n);
+    std::uint32_t *const filled = table.filled.data();
+    std::size_t fills = 0, matched = 0;
+    std::uint64_t bad = 0;
+    auto slot_of = [&](std::size_t i) {
+      std::uint64_t h = ids[i] >> 1;
+      h ^= h >> 33;
+      h *= 0xFF51AFD7ED558CCDull;
+      h ^= h >> 33;
+      return std::size_t(h & mask);
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint64_t e = ids[i];
+      for (std::size_t at = slot_of(i);; at = (at + 1) & mask) {
+        const std::uint64_t s = slots[at];
+        const std::uint64_t empty = s == 0;
+        const std::uint64_t same = ((s ^ e) & kKey) == 0;
+        if (empty | same) {
+          // A third copy, or two cells on one side.
+          bad |= same & ((s >> 63) | (~(s ^ e) & 1u));
+          matched += same;
+          slots[at] = empty ? e : s | kSecondCopy;
+          filled[fills] = std::uint32_t(at);
+          fills += empty;
+          break;
+        }
+      }
+    }
+    if (!bad) {
+      pairs += matched;
+      if (2 * matched != n) {
+        const std::size_t first = singles.size();
+        for (std::size_t k = 0; k < fills; ++k)
+          if (const std::uint64_t s = slots[filled[k]]; !(s & kSecondCopy))
+            singles.emplace_back(fine_of(s), Packed(s));
+        std::sort(singles.begin() + std::ptrdiff_t(first), singles.end());
+      }
+    }
+    for (std::size_t k = 0; k < fills; ++k)
+      slots[filled[k]] = 0;
+    return !bad;
+  }
 
   // Hashes entries [0, n) of (ids, fine), entries of one coarse bucket, and
   // appends the facets seen once to `singles`, sorted. Adds the facets seen
@@ -464,6 +528,8 @@ struct Walk {
   static bool match_range(const Packed *ids, const std::uint16_t *fine, std::size_t n,
                           MatchTable &table, std::vector<std::pair<std::uint16_t, Packed>> &singles,
                           std::size_t &pairs) {
+    if constexpr (FineInKey)
+      return match_packed(ids, n, table, singles, pairs);
     // Most facets come in pairs, so at most n / 2 + 1 distinct keys: with
     // at least 2n slots a load of at most about a quarter, so that a probe
     // rarely meets another key and the one branch below is predictable.

@@ -613,6 +613,28 @@ TEST_CASE("final check: matching facets by hashing gives the sorted walk's verdi
     twice.cells.insert(twice.cells.end(), m.cells.begin() + std::ptrdiff_t(n) * 12345,
                        m.cells.begin() + std::ptrdiff_t(n) * 12346);
     cases.emplace_back("twice", std::move(twice));
+    // A cell off the boundary moved last and repeated: each of its facets
+    // in three cells, its neighbour's copy first and the two others, on one
+    // side, after it (the third copy is what tells them apart).
+    Mesh thrice = m;
+    {
+      auto inside = [&](std::size_t c) {
+        for (int i = 0; i < n; ++i)
+          for (int d = 0; d < dim; ++d)
+            if (const double x = m.point(m.cell(CellId(c))[i])[d]; !(x > 0 && x < 1))
+              return false;
+        return true;
+      };
+      std::size_t c = nc / 3;
+      while (!inside(c))
+        ++c;
+      std::swap_ranges(thrice.cells.begin() + std::ptrdiff_t(n) * std::ptrdiff_t(c),
+                       thrice.cells.begin() + std::ptrdiff_t(n) * std::ptrdiff_t(c + 1),
+                       thrice.cells.end() - n);
+      const std::vector<VertexId> last(thrice.cells.end() - n, thrice.cells.end());
+      thrice.cells.insert(thrice.cells.end(), last.begin(), last.end());
+    }
+    cases.emplace_back("thrice", std::move(thrice));
     Mesh holed = m; // a cell removed: a hole, the boundary grows
     holed.cells.erase(holed.cells.begin() + std::ptrdiff_t(n) * 777,
                       holed.cells.begin() + std::ptrdiff_t(n) * 778);
