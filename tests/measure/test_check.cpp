@@ -549,6 +549,20 @@ TEST_CASE("final check: check_refined catches a hanging node, a split face, a de
     refine(m, {0, 1, 2});
     INFO("dim " << dim);
     CHECK(check_refined(m, inv).ok);
+    // An id out of range, named (not read: the sanitizer build would see),
+    // at the start, in the middle (another block of the cell pass) and at
+    // the end of the cells.
+    refine_uniform(m);
+    while (m.num_cells() < 40000)
+      refine_uniform(m);
+    const std::size_t nc = m.num_cells(), nv = m.num_vertices();
+    for (std::size_t c : {std::size_t(0), nc / 2 + 3, nc - 1}) {
+      Mesh bad = m;
+      bad.cells[c * std::size_t(dim + 1) + 1] = VertexId(nv + 5);
+      CHECK(check_refined(bad, inv).failure ==
+            "cell " + std::to_string(c) + " refers to vertex " + std::to_string(nv + 5) +
+                ", but there are only " + std::to_string(nv) + " vertices");
+    }
   }
 }
 
