@@ -610,12 +610,17 @@ struct Walk {
         MatchSlot &slot = slots[at];
         const unsigned empty = slot.stamp != stamp;
         const unsigned same = (slot.ids == key) & (slot.fine == f) & (empty ^ 1u);
-        if (empty | same) {
+        unsigned stop = empty | same;
+        // One branch on both (see match_packed): the empty asm hides how
+        // `stop` was made, or g++ tests `same` and `empty` apart again.
+        asm("" : "+r"(stop));
+        if (stop) {
           // A third copy, or two cells on one side.
           bad |= same & ((slot.copies != 1) | (slot.side == side));
           matched += same;
           const std::uint8_t copies = std::uint8_t(slot.copies * (empty ^ 1u) + 1);
-          const std::uint8_t first_side = empty ? side : slot.side;
+          const std::uint8_t first_side =
+              std::uint8_t((side & (0u - empty)) | (slot.side & (empty - 1u)));
           slot = MatchSlot{key, stamp, f, first_side, copies};
           filled[fills] = std::uint32_t(at);
           fills += empty;
