@@ -745,21 +745,32 @@ struct Walk {
           cursor[b - b0] += counts[std::size_t(u) * coarse + b];
       }
       std::array<VertexId, K> key;
+      // Local copies of the arrays' addresses: a store through a byte
+      // pointer (the chunk pairs) may alias any object, so g++ reloaded the
+      // vectors' data pointers (and the mesh's dimension) after each.
+      const VertexId *const cells = mesh.cells.data();
+      std::uint8_t *const pairs = buffers.pairs.empty() ? nullptr : buffers.pairs.data();
+      const std::uint8_t *const chunk_of = buffers.chunk_of.data();
+      const std::int8_t *const sign_of = signs ? signs->data() : nullptr;
+      Packed *const out = buffer.data();
+      std::uint16_t *const fine_out = fine.data();
+      std::size_t *const cur = cursor.data();
+      const int shift = this->shift;
       for (std::size_t c = part_begin(t), end = part_begin(t + 1); c < end; ++c) {
-        const VertexId *cell = mesh.cell(CellId(c));
+        const VertexId *cell = cells + c * std::size_t(Dim + 1);
         if constexpr (K == Dim && WithRefs) {
           // Facets from the cell's sorted ids: facet k omits the k-th
           // smallest, keeps the others in order, and its side follows from
           // the sort's parity (see facet_side).
           // Most cells have no facet in a chunk: the two smallest ids
           // decide that, without the sort.
-          if (!buffers.pairs.empty() && index > 0 && buffers.pairs[2 * c] != std::uint8_t(index) &&
-              buffers.pairs[2 * c + 1] != std::uint8_t(index))
+          if (pairs && index > 0 && pairs[2 * c] != std::uint8_t(index) &&
+              pairs[2 * c + 1] != std::uint8_t(index))
             continue;
           const auto [first, second] = two_smallest<Dim + 1>(cell);
-          if (!buffers.pairs.empty() && index == 0) {
-            buffers.pairs[2 * c] = buffers.chunk_of[first >> shift];
-            buffers.pairs[2 * c + 1] = buffers.chunk_of[second >> shift];
+          if (pairs && index == 0) {
+            pairs[2 * c] = chunk_of[first >> shift];
+            pairs[2 * c + 1] = chunk_of[second >> shift];
           }
           if (first >= hi_v || second < lo_v)
             continue;
@@ -768,7 +779,7 @@ struct Walk {
           std::array<VertexId, Dim + 1> ids;
           for (int i = 0; i <= Dim; ++i)
             ids[i] = VertexId(keys[i] >> 3);
-          const int sign = signs ? (*signs)[c] : 0;
+          const int sign = sign_of ? sign_of[c] : 0;
           auto facet = [&](int k) {
             Packed p = 0;
             for (int i = 0, j = 0; i <= Dim; ++i)
@@ -784,28 +795,28 @@ struct Walk {
           // Facet 0 (without the smallest id) goes to the second smallest
           // id's bucket, facets 1..Dim side by side to the smallest's.
           if (ids[1] >= lo_v && ids[1] < hi_v) {
-            const std::size_t at = cursor[(ids[1] >> shift) - b0]++;
+            const std::size_t at = cur[(ids[1] >> shift) - b0]++;
             if constexpr (FineInKey) {
-              buffer[at] = facet(0) | (Packed(ids[1] & mask) << kFineShift);
+              out[at] = facet(0) | (Packed(ids[1] & mask) << kFineShift);
             } else {
-              buffer[at] = facet(0);
+              out[at] = facet(0);
               if (shift)
-                fine[at] = std::uint16_t(ids[1] & mask);
+                fine_out[at] = std::uint16_t(ids[1] & mask);
             }
           }
           if (ids[0] >= lo_v && ids[0] < hi_v) {
-            std::size_t &end = cursor[(ids[0] >> shift) - b0];
+            std::size_t &end = cur[(ids[0] >> shift) - b0];
             const std::size_t at = end;
             end += Dim;
             if constexpr (FineInKey) {
               const Packed high = Packed(ids[0] & mask) << kFineShift;
               for (int k = 1; k <= Dim; ++k)
-                buffer[at + k - 1] = facet(k) | high;
+                out[at + k - 1] = facet(k) | high;
             } else {
               for (int k = 1; k <= Dim; ++k) {
-                buffer[at + k - 1] = facet(k);
+                out[at + k - 1] = facet(k);
                 if (shift)
-                  fine[at + k - 1] = std::uint16_t(ids[0] & mask);
+                  fine_out[at + k - 1] = std::uint16_t(ids[0] & mask);
               }
             }
           }
