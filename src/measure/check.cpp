@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -486,12 +487,11 @@ struct Walk {
     std::uint32_t *const filled = table.filled.data();
     std::size_t fills = 0, matched = 0;
     std::uint64_t bad = 0;
+    // Multiplicative hashing: the product's top bits (every key bit reaches
+    // them) pick the slot.
+    const int drop = 64 - std::countr_zero(cap);
     auto slot_of = [&](std::size_t i) {
-      std::uint64_t h = ids[i] >> 1;
-      h ^= h >> 33;
-      h *= 0xFF51AFD7ED558CCDull;
-      h ^= h >> 33;
-      return std::size_t(h & mask);
+      return std::size_t(((ids[i] >> 1) * 0x9E3779B97F4A7C15ull) >> drop);
     };
     // The slots are found a few entries ahead and prefetched (see
     // match_range): 0.04 s less in 26 M entries of a 4D mesh.
