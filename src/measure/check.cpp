@@ -992,6 +992,46 @@ bool small_solve(double *g, double *b, int n, double *x) {
   return true;
 }
 
+// The inverse of the N x N matrix g (row-major, destroyed) into x: one
+// elimination for all N columns of the identity, each column given by the
+// very operations small_solve would apply to it alone (the same pivots and
+// multipliers, in the same order), so the same numbers as N calls of it.
+// false when g is singular.
+template <int N> bool small_inverse(double *g, double *x) {
+  double b[N * N]; // b[i * N + j]: row i of the right-hand side j
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j < N; ++j)
+      b[i * N + j] = i == j ? 1.0 : 0.0;
+  for (int k = 0; k < N; ++k) {
+    int p = k;
+    for (int i = k + 1; i < N; ++i)
+      if (std::abs(g[i * N + k]) > std::abs(g[p * N + k]))
+        p = i;
+    if (!(std::abs(g[p * N + k]) > 0))
+      return false;
+    if (p != k)
+      for (int j = 0; j < N; ++j) {
+        std::swap(g[k * N + j], g[p * N + j]);
+        std::swap(b[k * N + j], b[p * N + j]);
+      }
+    for (int i = k + 1; i < N; ++i) {
+      const double f = g[i * N + k] / g[k * N + k];
+      for (int j = k; j < N; ++j)
+        g[i * N + j] -= f * g[k * N + j];
+      for (int j = 0; j < N; ++j)
+        b[i * N + j] -= f * b[k * N + j];
+    }
+  }
+  for (int c = 0; c < N; ++c)
+    for (int k = N - 1; k >= 0; --k) {
+      double s = b[k * N + c];
+      for (int j = k + 1; j < N; ++j)
+        s -= g[k * N + j] * x[j * N + c];
+      x[k * N + c] = s / g[k * N + k];
+    }
+  return true;
+}
+
 // (Dim-1)-measure of the facet with vertex rows p[0..Dim): the product of the
 // edge vectors' orthogonalised lengths over (Dim-1)!, by modified Gram-Schmidt
 // taking the longest remaining vector first. The Gram determinant would square
@@ -1838,19 +1878,11 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
     // per cell when a centroid first falls in its box; lambda[0] = 1 - the
     // rest.
     auto make_inverse = [&]() {
-      for (int j = 0; j < Dim; ++j) {
-        double g[Dim * Dim], b[Dim], col[Dim];
-        for (int r = 0; r < Dim; ++r) {
-          for (int e = 0; e < Dim; ++e)
-            g[r * Dim + e] = pts[(e + 1) * Dim + r] - pts[r];
-          b[r] = r == j ? 1.0 : 0.0;
-        }
-        if (!small_solve(g, b, Dim, col))
-          return false;
-        for (int r = 0; r < Dim; ++r)
-          inv[r * Dim + j] = col[r];
-      }
-      return true;
+      double g[Dim * Dim];
+      for (int r = 0; r < Dim; ++r)
+        for (int e = 0; e < Dim; ++e)
+          g[r * Dim + e] = pts[(e + 1) * Dim + r] - pts[r];
+      return small_inverse<Dim>(g, inv);
     };
     std::uint64_t best = kNone;
     std::vector<std::uint32_t> candidates(64);
