@@ -961,9 +961,12 @@ template <int Dim, int K> std::size_t count_subsimplices(const Mesh &mesh) {
 
 using geometry::squared_distance;
 
-// Solves the n x n system G x = b (n <= 4) by elimination with pivoting;
-// false when G is singular.
-bool small_solve(double *g, double *b, int n, double *x) {
+// Solves the n x n system G X = B (n <= 4) for `rhs` right-hand sides (B and
+// X row-major, n x rhs) by elimination with pivoting; false when G is
+// singular. Each column gets the very operations it would get alone (the
+// pivots and multipliers depend on G only), so one call for the n columns of
+// the identity gives the inverse in the numbers of n single solves.
+bool small_solve(double *g, double *b, int n, double *x, int rhs = 1) {
   for (int k = 0; k < n; ++k) {
     int p = k;
     for (int i = k + 1; i < n; ++i)
@@ -974,60 +977,23 @@ bool small_solve(double *g, double *b, int n, double *x) {
     if (p != k) {
       for (int j = 0; j < n; ++j)
         std::swap(g[k * n + j], g[p * n + j]);
-      std::swap(b[k], b[p]);
+      for (int c = 0; c < rhs; ++c)
+        std::swap(b[k * rhs + c], b[p * rhs + c]);
     }
     for (int i = k + 1; i < n; ++i) {
       const double f = g[i * n + k] / g[k * n + k];
       for (int j = k; j < n; ++j)
         g[i * n + j] -= f * g[k * n + j];
-      b[i] -= f * b[k];
+      for (int c = 0; c < rhs; ++c)
+        b[i * rhs + c] -= f * b[k * rhs + c];
     }
   }
-  for (int k = n - 1; k >= 0; --k) {
-    double s = b[k];
-    for (int j = k + 1; j < n; ++j)
-      s -= g[k * n + j] * x[j];
-    x[k] = s / g[k * n + k];
-  }
-  return true;
-}
-
-// The inverse of the N x N matrix g (row-major, destroyed) into x: one
-// elimination for all N columns of the identity, each column given by the
-// very operations small_solve would apply to it alone (the same pivots and
-// multipliers, in the same order), so the same numbers as N calls of it.
-// false when g is singular.
-template <int N> bool small_inverse(double *g, double *x) {
-  double b[N * N]; // b[i * N + j]: row i of the right-hand side j
-  for (int i = 0; i < N; ++i)
-    for (int j = 0; j < N; ++j)
-      b[i * N + j] = i == j ? 1.0 : 0.0;
-  for (int k = 0; k < N; ++k) {
-    int p = k;
-    for (int i = k + 1; i < N; ++i)
-      if (std::abs(g[i * N + k]) > std::abs(g[p * N + k]))
-        p = i;
-    if (!(std::abs(g[p * N + k]) > 0))
-      return false;
-    if (p != k)
-      for (int j = 0; j < N; ++j) {
-        std::swap(g[k * N + j], g[p * N + j]);
-        std::swap(b[k * N + j], b[p * N + j]);
-      }
-    for (int i = k + 1; i < N; ++i) {
-      const double f = g[i * N + k] / g[k * N + k];
-      for (int j = k; j < N; ++j)
-        g[i * N + j] -= f * g[k * N + j];
-      for (int j = 0; j < N; ++j)
-        b[i * N + j] -= f * b[k * N + j];
-    }
-  }
-  for (int c = 0; c < N; ++c)
-    for (int k = N - 1; k >= 0; --k) {
-      double s = b[k * N + c];
-      for (int j = k + 1; j < N; ++j)
-        s -= g[k * N + j] * x[j * N + c];
-      x[k * N + c] = s / g[k * N + k];
+  for (int c = 0; c < rhs; ++c)
+    for (int k = n - 1; k >= 0; --k) {
+      double s = b[k * rhs + c];
+      for (int j = k + 1; j < n; ++j)
+        s -= g[k * n + j] * x[j * rhs + c];
+      x[k * rhs + c] = s / g[k * n + k];
     }
   return true;
 }
@@ -1345,9 +1311,10 @@ std::string check_shape(const Mesh &mesh) {
 
 // Sum of |volume|; `first_degenerate` set to the first degenerate cell (or
 // -1); `signs`, when given, receives each cell's orientation (0 if degenerate).
-// With `ids_ok`, the cells' ids are checked on the way (a cell with an id out
-// of range is skipped and `ids_ok` set to false; check_ids names it) instead
-// of by a pass of their own.
+// With `ids_ok`, the cells' ids are checked on the way, a block at a time
+// before the block is read (a block with an id out of range is skipped and
+// `ids_ok` set to false; check_ids names the cell), instead of by a serial
+// pass of their own.
 template <int Dim>
 double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_volume,
                  std::vector<std::int8_t> *signs = nullptr, bool *ids_ok = nullptr) {
@@ -1369,28 +1336,19 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
     double pts[(Dim + 1) * Dim];
     double total = 0;
     const std::size_t end = std::min(nc, (k + 1) * kBlock);
-    for (std::size_t c = k * kBlock; c < end; ++c) {
-      if (ids_ok) {
-        const VertexId *cell = mesh.cell(CellId(c));
-        bool in_range = true;
-        for (int i = 0; i <= Dim; ++i)
-          in_range &= cell[i] < nv;
-        if (!in_range) {
-          out_of_range[k] = 1;
-          continue;
-        }
-        // (The prefetch below would read a bad id's point.)
-        if (c + kAhead < end) {
-          const VertexId *ahead = mesh.cell(CellId(c + kAhead));
-          bool ok = true;
-          for (int i = 0; i <= Dim; ++i)
-            ok &= ahead[i] < nv;
-          if (ok)
-            geometry::prefetch_points<Dim>(mesh, CellId(c + kAhead));
-        }
-      } else if (c + kAhead < end) {
-        geometry::prefetch_points<Dim>(mesh, CellId(c + kAhead));
+    if (ids_ok) {
+      const VertexId *ids = mesh.cell(CellId(k * kBlock));
+      bool in_range = true;
+      for (std::size_t i = 0; i < (end - k * kBlock) * (Dim + 1); ++i)
+        in_range &= ids[i] < nv;
+      if (!in_range) {
+        out_of_range[k] = 1;
+        continue;
       }
+    }
+    for (std::size_t c = k * kBlock; c < end; ++c) {
+      if (c + kAhead < end)
+        geometry::prefetch_points<Dim>(mesh, CellId(c + kAhead));
       gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
       const double v = geometry::signed_volume<Dim>(pts);
       total += std::abs(v);
@@ -1882,7 +1840,11 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
       for (int r = 0; r < Dim; ++r)
         for (int e = 0; e < Dim; ++e)
           g[r * Dim + e] = pts[(e + 1) * Dim + r] - pts[r];
-      return small_inverse<Dim>(g, inv);
+      double identity[Dim * Dim];
+      for (int r = 0; r < Dim; ++r)
+        for (int e = 0; e < Dim; ++e)
+          identity[r * Dim + e] = r == e ? 1.0 : 0.0;
+      return small_solve(g, identity, Dim, inv, Dim);
     };
     std::uint64_t best = kNone;
     std::vector<std::uint32_t> candidates(64);

@@ -88,6 +88,10 @@ for p in 2 3; do
   n=$((n + 1))
 done
 run_mpi 2 coarsen r.vtu --all -n 2 -o dg.vtu -q -f
+# --format with a .pvtu output: refused, one line, nothing written.
+expect_exit 1 run_mpi 2 coarsen r.vtu --all --format vtu -o nope.pvtu -q -f
+one_bisect_line_naming "--format with a .pvtu output"
+[[ ! -e nope.pvtu ]] || fail "a refused coarsen wrote nope.pvtu"
 expect_exit 0 run_mpi 2 coarsen r.vtu --all -n 2 -o - --format vtu -q
 cmp -s "$WORK/out" dg.vtu || fail "coarsen -o - --format vtu under mpirun differs from the gathered file"
 # Refused, one line each, nothing written: --slices of a 2D mesh, --slices
