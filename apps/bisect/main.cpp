@@ -31,12 +31,13 @@ bool g_other_rank = false;
 // run's result exists but temporary files, so they are removed and the
 // process ends at once, whatever it was doing (reading, refining, writing).
 // After the commit the run is complete and the signal is only noted.
+// (Whichever thread takes the signal: remove_pending_outputs decides, once,
+// between this and the commit.)
 extern "C" void on_signal(int) {
-  if (outputs_committed()) {
+  if (!remove_pending_outputs()) {
     g_interrupted = true;
     return;
   }
-  remove_pending_outputs();
   static const char msg[] = "bisect: interrupted; no output written\n";
   if (!g_silent_signals)
     (void)!::write(STDERR_FILENO, msg, sizeof msg - 1);

@@ -58,11 +58,15 @@ private:
   bool committed_ = false;
 };
 
-// Removes every temporary file of uncommitted OutputSets. Async-signal-safe
-// (unlink only): the CLI's SIGINT/SIGTERM handler calls it before _exit.
-void remove_pending_outputs() noexcept;
+// Removes every temporary file of uncommitted OutputSets and returns true,
+// unless a commit has begun in this process: then it removes nothing and
+// returns false (the outputs are being, or have been, renamed into place;
+// the caller lets the run finish). Async-signal-safe (an atomic and unlink):
+// the CLI's SIGINT/SIGTERM handler calls it, and on true ends the process
+// at once; after true, a later commit() waits for that end.
+bool remove_pending_outputs() noexcept;
 
-// True once an OutputSet has been committed in this process (a signal after
+// True once an OutputSet's commit has begun in this process (a signal after
 // that has nothing left to undo).
 bool outputs_committed() noexcept;
 

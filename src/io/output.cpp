@@ -24,7 +24,13 @@ namespace fs = std::filesystem;
 // each slot holds a heap string that stays alive while the slot points at it.
 constexpr std::size_t kSlots = 16384;
 std::atomic<const char *> g_pending[kSlots];
-std::atomic<bool> g_committed{false};
+// 0: nothing committed; 1: a commit has begun (its renames run, or ran, to
+// the end); 2: a signal handler removed the temporaries and is ending the
+// process. The handler and commit() each claim the state from 0 once, so
+// that a signal taken by another thread (sigprocmask in commit() blocks only
+// its own) cannot remove temporaries while commit() renames them: that left
+// a new mesh beside the old CSV with exit 130 (cli.outputs, once).
+std::atomic<int> g_state{0};
 
 int take_slot(const char *path) {
   for (std::size_t i = 0; i < kSlots; ++i) {
@@ -105,16 +111,18 @@ std::string write_failure(int err) {
   return s;
 }
 
-void remove_pending_outputs() noexcept {
-  if (g_committed.load())
-    return;
+bool remove_pending_outputs() noexcept {
+  int open = 0;
+  if (!g_state.compare_exchange_strong(open, 2))
+    return false;
   for (std::size_t i = 0; i < kSlots; ++i)
     if (const char *p = g_pending[i].load())
       ::unlink(p);
+  return true;
 }
 
 bool outputs_committed() noexcept {
-  return g_committed.load();
+  return g_state.load() == 1;
 }
 
 OutputSet::OutputSet(std::vector<std::string> inputs, bool force)
@@ -220,6 +228,10 @@ void OutputSet::commit() {
   sigaddset(&block, SIGTERM);
   sigaddset(&block, SIGHUP);
   ::sigprocmask(SIG_BLOCK, &block, &old);
+  int state = 0;
+  if (!g_state.compare_exchange_strong(state, 1) && state == 2)
+    for (;;)
+      ::pause(); // a signal handler is removing the temporaries and ending the process
   std::string failure;
   for (Output &o : outputs_) {
     if (o.direct || o.temp.empty())
@@ -236,7 +248,6 @@ void OutputSet::commit() {
     o.slot = -1;
   }
   committed_ = true;
-  g_committed = true;
   ::sigprocmask(SIG_SETMASK, &old, nullptr);
   if (!failure.empty())
     throw InputError("", failure);
