@@ -11,6 +11,7 @@
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
+#include <pthread.h>
 #include <string_view>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -31,6 +32,10 @@ std::atomic<const char *> g_pending[kSlots];
 // its own) cannot remove temporaries while commit() renames them: that left
 // a new mesh beside the old CSV with exit 130 (cli.outputs, once).
 std::atomic<int> g_state{0};
+// Temporaries being created (opened, not yet registered in g_pending): the
+// handler waits for them, so that none is made and left behind as it ends
+// the process (see OutputSet::file).
+std::atomic<int> g_creating{0};
 
 int take_slot(const char *path) {
   for (std::size_t i = 0; i < kSlots; ++i) {
@@ -115,6 +120,8 @@ bool remove_pending_outputs() noexcept {
   int open = 0;
   if (!g_state.compare_exchange_strong(open, 2))
     return false;
+  while (g_creating.load() != 0)
+    ; // another thread is registering the file it just made
   for (std::size_t i = 0; i < kSlots; ++i)
     if (const char *p = g_pending[i].load())
       ::unlink(p);
@@ -198,14 +205,33 @@ const std::string &OutputSet::file(int handle) {
   static std::atomic<unsigned> counter{0};
   for (int attempt = 0; attempt < 100; ++attempt) {
     std::string temp = temporary_name(o.target, counter++);
-    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd < 0) {
-      if (errno == EEXIST)
-        continue;
-      throw InputError(o.name, "cannot write: " + write_failure(errno));
-    }
     char *registered = copy_c_string(temp);
-    o.slot = take_slot(registered);
+    // Made and registered with the signals blocked in this thread, and
+    // counted in g_creating for a handler running in another: a signal
+    // either stops the run before the file exists, or removes it.
+    sigset_t block, old;
+    sigemptyset(&block);
+    sigaddset(&block, SIGINT);
+    sigaddset(&block, SIGTERM);
+    sigaddset(&block, SIGHUP);
+    ::pthread_sigmask(SIG_BLOCK, &block, &old);
+    ++g_creating;
+    if (g_state.load() == 2) {
+      --g_creating;
+      for (;;)
+        ::pause(); // a signal handler is ending the process
+    }
+    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    const int open_errno = errno;
+    o.slot = fd < 0 ? -1 : take_slot(registered);
+    --g_creating;
+    ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
+    if (fd < 0) {
+      delete[] registered;
+      if (open_errno == EEXIST)
+        continue;
+      throw InputError(o.name, "cannot write: " + write_failure(open_errno));
+    }
     if (o.slot < 0) {
       delete[] registered;
       ::close(fd);
@@ -227,7 +253,7 @@ void OutputSet::commit() {
   sigaddset(&block, SIGINT);
   sigaddset(&block, SIGTERM);
   sigaddset(&block, SIGHUP);
-  ::sigprocmask(SIG_BLOCK, &block, &old);
+  ::pthread_sigmask(SIG_BLOCK, &block, &old);
   int state = 0;
   if (!g_state.compare_exchange_strong(state, 1) && state == 2)
     for (;;)
@@ -248,7 +274,7 @@ void OutputSet::commit() {
     o.slot = -1;
   }
   committed_ = true;
-  ::sigprocmask(SIG_SETMASK, &old, nullptr);
+  ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
   if (!failure.empty())
     throw InputError("", failure);
 }
