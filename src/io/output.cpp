@@ -37,6 +37,25 @@ std::atomic<int> g_state{0};
 // the process (see OutputSet::file).
 std::atomic<int> g_creating{0};
 
+// SIGINT, SIGTERM and SIGHUP blocked in this thread while it lives.
+class BlockedSignals {
+public:
+  BlockedSignals() {
+    sigset_t block;
+    sigemptyset(&block);
+    sigaddset(&block, SIGINT);
+    sigaddset(&block, SIGTERM);
+    sigaddset(&block, SIGHUP);
+    ::pthread_sigmask(SIG_BLOCK, &block, &old_);
+  }
+  ~BlockedSignals() { ::pthread_sigmask(SIG_SETMASK, &old_, nullptr); }
+  BlockedSignals(const BlockedSignals &) = delete;
+  BlockedSignals &operator=(const BlockedSignals &) = delete;
+
+private:
+  sigset_t old_;
+};
+
 int take_slot(const char *path) {
   for (std::size_t i = 0; i < kSlots; ++i) {
     const char *expected = nullptr;
@@ -209,23 +228,20 @@ const std::string &OutputSet::file(int handle) {
     // Made and registered with the signals blocked in this thread, and
     // counted in g_creating for a handler running in another: a signal
     // either stops the run before the file exists, or removes it.
-    sigset_t block, old;
-    sigemptyset(&block);
-    sigaddset(&block, SIGINT);
-    sigaddset(&block, SIGTERM);
-    sigaddset(&block, SIGHUP);
-    ::pthread_sigmask(SIG_BLOCK, &block, &old);
-    ++g_creating;
-    if (g_state.load() == 2) {
+    int fd, open_errno;
+    {
+      const BlockedSignals blocked;
+      ++g_creating;
+      if (g_state.load() == 2) {
+        --g_creating;
+        for (;;)
+          ::pause(); // a signal handler is ending the process
+      }
+      fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+      open_errno = errno;
+      o.slot = fd < 0 ? -1 : take_slot(registered);
       --g_creating;
-      for (;;)
-        ::pause(); // a signal handler is ending the process
     }
-    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    const int open_errno = errno;
-    o.slot = fd < 0 ? -1 : take_slot(registered);
-    --g_creating;
-    ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
     if (fd < 0) {
       delete[] registered;
       if (open_errno == EEXIST)
@@ -248,33 +264,29 @@ const std::string &OutputSet::file(int handle) {
 }
 
 void OutputSet::commit() {
-  sigset_t block, old;
-  sigemptyset(&block);
-  sigaddset(&block, SIGINT);
-  sigaddset(&block, SIGTERM);
-  sigaddset(&block, SIGHUP);
-  ::pthread_sigmask(SIG_BLOCK, &block, &old);
-  int state = 0;
-  if (!g_state.compare_exchange_strong(state, 1) && state == 2)
-    for (;;)
-      ::pause(); // a signal handler is removing the temporaries and ending the process
   std::string failure;
-  for (Output &o : outputs_) {
-    if (o.direct || o.temp.empty())
-      continue;
-    // After a failed rename (which nothing short of a vanished directory
-    // causes) the rest are not renamed either.
-    if (!failure.empty() || ::rename(o.temp.c_str(), o.target.c_str()) != 0) {
-      if (failure.empty())
-        failure = o.name + ": cannot write: " + write_failure(errno);
-      ::unlink(o.temp.c_str());
+  {
+    const BlockedSignals blocked;
+    int state = 0;
+    if (!g_state.compare_exchange_strong(state, 1) && state == 2)
+      for (;;)
+        ::pause(); // a signal handler is removing the temporaries and ending the process
+    for (Output &o : outputs_) {
+      if (o.direct || o.temp.empty())
+        continue;
+      // After a failed rename (which nothing short of a vanished directory
+      // causes) the rest are not renamed either.
+      if (!failure.empty() || ::rename(o.temp.c_str(), o.target.c_str()) != 0) {
+        if (failure.empty())
+          failure = o.name + ": cannot write: " + write_failure(errno);
+        ::unlink(o.temp.c_str());
+      }
+      o.temp.clear();
+      release_slot(o.slot);
+      o.slot = -1;
     }
-    o.temp.clear();
-    release_slot(o.slot);
-    o.slot = -1;
+    committed_ = true;
   }
-  committed_ = true;
-  ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
   if (!failure.empty())
     throw InputError("", failure);
 }
