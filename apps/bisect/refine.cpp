@@ -202,6 +202,8 @@ int run_refine(const RefineArgs &a) {
 #else
   options.check_every_iteration = a.check;
 #endif
+  // The callback below only reads the mesh, unless a test installs its hook.
+  options.on_iteration_changes_mesh = g_after_iteration_hook != nullptr;
   std::size_t selected_total = 0;
   auto on_iteration = [&](const IterationReport &r, Mesh &m) {
     selected_total += r.selected;

@@ -1,9 +1,12 @@
 // Conformity checks (ALGORITHMS.md §7), shared by the tests and `bisect check`.
 #pragma once
 
+#include "bisect/measure.hpp"
 #include "bisect/mesh.hpp"
 
 #include <array>
+#include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -74,7 +77,41 @@ void for_each_interior_facet(const Mesh &mesh, const InteriorFacets &facets,
 // measure by at least twice the smallest boundary facet; when that facet is
 // below 1e-8 of the boundary measure, the geometric search of check_conformity
 // for vertices and facet centroids on boundary facets runs as well.
-CheckResult check_refined(const Mesh &mesh, const Invariants &original);
+//
+// `facts`, when given and taken from this mesh as it is now (see
+// quality_with_cell_facts), replace the check's own first pass over the
+// cells.
+struct CellFacts;
+CheckResult check_refined(const Mesh &mesh, const Invariants &original,
+                          const CellFacts *facts = nullptr);
+
+// What check_refined's first pass over the cells finds: each cell's
+// orientation, the volume, the first degenerate cell, whether every id is
+// in range. quality_with_cell_facts takes them in the same walk as the
+// quality summary (both gather each cell's points and need its
+// determinant), so that a caller that measures the quality of the mesh it
+// is about to check walks the cells once. They describe the mesh as it was
+// then: check_refined uses them only for a mesh of the same arrays and
+// sizes, and a caller that changes cells or points in place in between must
+// not pass them.
+struct CellFacts {
+  std::vector<std::int8_t> signs; // +1, -1, 0 for a degenerate cell
+  double volume = 0;              // sum of |cell volume|
+  std::size_t first_degenerate = std::size_t(-1);
+  double its_volume = 0; // the first degenerate cell's signed volume
+  bool ids_ok = true;
+  // The mesh they were taken from.
+  const VertexId *cells = nullptr;
+  const double *coords = nullptr;
+  std::size_t num_cells = 0, num_vertices = 0;
+  bool describe(const Mesh &mesh) const {
+    return cells == mesh.cells.data() && coords == mesh.coords.data() &&
+           num_cells == mesh.num_cells() && num_vertices == mesh.num_vertices();
+  }
+};
+
+// quality_summary (measure.hpp), with `facts` taken on the way.
+QualitySummary quality_with_cell_facts(const Mesh &mesh, CellFacts &facts);
 
 // Progress of a long load or validation: called as each step starts, with
 // the step ("reading", "matching facets", ...) and an estimate of the

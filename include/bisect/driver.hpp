@@ -30,6 +30,10 @@ struct DriverOptions {
   bool final_check = true;                   // the cheap final check (check_refined) at the end
   const std::atomic<bool> *cancel = nullptr; // set it to stop (the running
                                              // iteration is undone)
+  // Whether `on_iteration` may change the mesh. When it does not, the last
+  // iteration's quality pass also takes the final check's cell facts
+  // (quality_with_cell_facts), and the check does not walk the cells again.
+  bool on_iteration_changes_mesh = true;
 };
 
 // One finished iteration.

@@ -5,6 +5,7 @@
 #include "bisect/mesh.hpp"
 
 #include <array>
+#include <cmath>
 
 namespace bisect::geometry {
 
@@ -69,6 +70,38 @@ template <int Dim> double edge_determinant(const double *verts) {
 // Signed volume of the simplex with vertex rows verts[0..Dim].
 template <int Dim> double signed_volume(const double *verts) {
   return edge_determinant<Dim>(verts) / factorial(Dim);
+}
+
+// With W the edge matrix of the unit equilateral simplex, W^T W = (I + 11^T)/2,
+// so (W^T W)^-1 = 2 (I - 11^T/(n+1)) and
+//   |S|_F^2 = tr(A^T A (W^T W)^-1) = 2/(n+1) * sum over all vertex pairs |xi-xj|^2,
+//   det S   = det A / det W,  det W = sqrt(n+1) / 2^(n/2).
+// This is exactly q = n |det S|^(2/n) / |S|_F^2, written so that it does not
+// depend on the vertex order (tests compare it with an explicit A W^-1).
+// `det` is edge_determinant<Dim>(verts), for callers that have it already.
+template <int Dim> double mean_ratio_t(const double *verts, double det) {
+  constexpr int n = Dim;
+  double sum_sq = 0;
+  for (int i = 0; i <= n; ++i)
+    for (int j = i + 1; j <= n; ++j)
+      sum_sq += squared_distance<Dim>(verts + i * Dim, verts + j * Dim);
+  if (!(sum_sq > 0))
+    return 0;
+  const double det_w = std::sqrt(double(n + 1)) / std::pow(2.0, 0.5 * n);
+  const double r = std::abs(det) / det_w; // |det S|
+  double r_2n;                            // |det S|^(2/n)
+  if constexpr (n == 2)
+    r_2n = r;
+  else if constexpr (n == 4)
+    r_2n = std::sqrt(r);
+  else
+    r_2n = std::cbrt(r * r);
+  const double frob_sq = 2.0 / (n + 1) * sum_sq;
+  return n * r_2n / frob_sq;
+}
+
+template <int Dim> double mean_ratio_t(const double *verts) {
+  return mean_ratio_t<Dim>(verts, edge_determinant<Dim>(verts));
 }
 
 // Asks for the coordinates of cell c's vertices ahead of their use. The

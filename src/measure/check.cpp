@@ -1315,9 +1315,13 @@ std::string check_shape(const Mesh &mesh) {
 // before the block is read (a block with an id out of range is skipped and
 // `ids_ok` set to false; check_ids names the cell), instead of by a serial
 // pass of their own.
+// With `quality`, the quality summary of quality_summary (measure.cpp) as
+// well, from the same determinants and summed in the same blocks: the same
+// figures.
 template <int Dim>
 double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_volume,
-                 std::vector<std::int8_t> *signs = nullptr, bool *ids_ok = nullptr) {
+                 std::vector<std::int8_t> *signs = nullptr, bool *ids_ok = nullptr,
+                 QualitySummary *quality = nullptr) {
   // Blocks of kBlock cells, summed in block order: the same total for every
   // thread count.
   constexpr std::size_t kBlock = std::size_t(1) << 14, kAhead = 8;
@@ -1326,6 +1330,8 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
   std::vector<std::size_t> first(blocks, std::size_t(-1));
   std::vector<double> first_volume(blocks, 0.0);
   std::vector<std::uint8_t> out_of_range(ids_ok ? blocks : 0, 0);
+  const std::size_t qblocks = quality ? blocks : 0;
+  std::vector<double> q_lo(qblocks, 1e300), q_hi(qblocks, -1e300), q_sum(qblocks, 0.0);
   const std::size_t nv = mesh.num_vertices();
   if (signs)
     signs->assign(nc, 0);
@@ -1346,23 +1352,53 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
         continue;
       }
     }
-    for (std::size_t c = k * kBlock; c < end; ++c) {
-      if (c + kAhead < end)
-        geometry::prefetch_points<Dim>(mesh, CellId(c + kAhead));
-      gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
-      const double v = geometry::signed_volume<Dim>(pts);
-      total += std::abs(v);
-      // Above the bound for the longest possible edge no cell is
-      // degenerate: the cell's own edges are needed only below it.
-      const bool bad = !(std::abs(v) > any_edge_bound) && degenerate<Dim>(pts, v);
-      if (signs && !bad)
-        (*signs)[c] = v > 0 ? 1 : -1;
-      if (bad && first[k] == std::size_t(-1)) {
-        first[k] = c;
-        first_volume[k] = v;
+    // The loop, with or without the quality summary.
+    auto walk = [&]<bool Quality>() {
+      double q_min = 1e300, q_max = -1e300, q_total = 0;
+      for (std::size_t c = k * kBlock; c < end; ++c) {
+        if (c + kAhead < end)
+          geometry::prefetch_points<Dim>(mesh, CellId(c + kAhead));
+        gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
+        const double det = geometry::edge_determinant<Dim>(pts);
+        const double v = det / geometry::factorial(Dim); // geometry::signed_volume
+        total += std::abs(v);
+        if constexpr (Quality) {
+          const double q = geometry::mean_ratio_t<Dim>(pts, det);
+          q_min = std::min(q_min, q);
+          q_max = std::max(q_max, q);
+          q_total += q;
+        }
+        // Above the bound for the longest possible edge no cell is
+        // degenerate: the cell's own edges are needed only below it.
+        const bool bad = !(std::abs(v) > any_edge_bound) && degenerate<Dim>(pts, v);
+        if (signs && !bad)
+          (*signs)[c] = v > 0 ? 1 : -1;
+        if (bad && first[k] == std::size_t(-1)) {
+          first[k] = c;
+          first_volume[k] = v;
+        }
       }
-    }
+      if constexpr (Quality) {
+        q_lo[k] = q_min;
+        q_hi[k] = q_max;
+        q_sum[k] = q_total;
+      }
+    };
+    if (quality)
+      walk.template operator()<true>();
+    else
+      walk.template operator()<false>();
     sums[k] = total;
+  }
+  if (quality) {
+    *quality = QualitySummary{1e300, -1e300, 0};
+    double q_total = 0;
+    for (std::size_t k = 0; k < blocks; ++k) {
+      quality->min = std::min(quality->min, q_lo[k]);
+      quality->max = std::max(quality->max, q_hi[k]);
+      q_total += q_sum[k];
+    }
+    quality->mean = q_total / double(nc);
   }
   if (ids_ok)
     *ids_ok = std::find(out_of_range.begin(), out_of_range.end(), 1) == out_of_range.end();
@@ -2438,7 +2474,23 @@ static FacetReport final_facet_pass(const Mesh &mesh, const std::vector<std::int
   return facet_pass<D, true>(mesh, &signs, true, nullptr, budget(D == 4 ? 18 : 10));
 }
 
-CheckResult check_refined(const Mesh &mesh, const Invariants &original) {
+QualitySummary quality_with_cell_facts(const Mesh &mesh, CellFacts &facts) {
+  facts = CellFacts{};
+  if (!check_shape(mesh).empty() || mesh.num_cells() == 0)
+    return quality_summary(mesh); // no facts: check_refined walks the cells itself
+  QualitySummary q;
+  dispatch(mesh.dim, [&]<int D>() {
+    facts.volume = cell_pass<D>(mesh, facts.first_degenerate, facts.its_volume, &facts.signs,
+                                &facts.ids_ok, &q);
+  });
+  facts.cells = mesh.cells.data();
+  facts.coords = mesh.coords.data();
+  facts.num_cells = mesh.num_cells();
+  facts.num_vertices = mesh.num_vertices();
+  return q;
+}
+
+CheckResult check_refined(const Mesh &mesh, const Invariants &original, const CellFacts *facts) {
   auto fail = [](std::string what) { return CheckResult{false, std::move(what)}; };
   if (std::string s = check_shape(mesh); !s.empty())
     return fail(s);
@@ -2447,9 +2499,17 @@ CheckResult check_refined(const Mesh &mesh, const Invariants &original) {
   return dispatch(mesh.dim, [&]<int D>() {
     std::size_t bad;
     double bad_volume = 0;
-    std::vector<std::int8_t> signs;
+    std::vector<std::int8_t> own_signs;
     bool ids_ok = true;
-    const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs, &ids_ok);
+    const bool taken = facts && facts->describe(mesh);
+    const double volume =
+        taken ? facts->volume : cell_pass<D>(mesh, bad, bad_volume, &own_signs, &ids_ok);
+    if (taken) {
+      bad = facts->first_degenerate;
+      bad_volume = facts->its_volume;
+      ids_ok = facts->ids_ok;
+    }
+    const std::vector<std::int8_t> &signs = taken ? facts->signs : own_signs;
     if (!ids_ok)
       return fail(check_ids(mesh));
     if (bad != std::size_t(-1))

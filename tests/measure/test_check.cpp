@@ -892,3 +892,67 @@ TEST_CASE("input facts: validation's invariants and interior facets are those me
   }
   set_threads(0);
 }
+
+TEST_CASE("final check: cell facts taken with the quality give the same quality and verdicts, "
+          "and are used only for the mesh they describe",
+          "[check][2d][3d][4d]") {
+  for (int dim : {2, 3, 4}) {
+    // More than two 16,384-cell blocks, so block order matters.
+    Mesh m = generate_kuhn(dim, dim == 2 ? 40 : dim == 3 ? 12 : 5);
+    mark_mesh(m, Marking::Index);
+    const Invariants original = measure_invariants(m, false);
+    while (m.num_cells() < 40000)
+      refine_uniform(m);
+    refine(m, {0, 1, 2, 3});
+    const int n = dim + 1;
+    const std::size_t nc = m.num_cells(), nv = m.num_vertices();
+    std::vector<std::pair<std::string, Mesh>> cases;
+    cases.emplace_back("honest", m);
+    Mesh moved = m; // a fold and a hanging node, found by the facet walk
+    moved.cells[std::size_t(n) * (nc / 2) + 1] = moved.cells[std::size_t(n) * (nc / 2 + 1) + 2];
+    cases.emplace_back("moved", std::move(moved));
+    Mesh flat = m; // a cell squashed onto its first vertex's neighbour: degenerate
+    for (int d = 0; d < dim; ++d)
+      flat.coords[std::size_t(dim) * flat.cell(CellId(nc - 7))[1] + std::size_t(d)] =
+          flat.point(flat.cell(CellId(nc - 7))[0])[d];
+    cases.emplace_back("flat", std::move(flat));
+    Mesh out = m; // an id out of range, in the second block
+    out.cells[std::size_t(n) * 20000 + 2] = VertexId(nv + 1);
+    cases.emplace_back("out of range", std::move(out));
+    for (const auto &[what, mesh] : cases) {
+      INFO("dim " << dim << ", " << what);
+      CellFacts facts;
+      const QualitySummary q = quality_with_cell_facts(mesh, facts);
+      REQUIRE(facts.describe(mesh));
+      REQUIRE(facts.signs.size() == mesh.num_cells());
+      if (what != "out of range") { // whose quality is undefined
+        const QualitySummary plain = quality_summary(mesh);
+        CHECK(q.min == plain.min); // bit for bit
+        CHECK(q.max == plain.max);
+        CHECK(q.mean == plain.mean);
+      }
+      const CheckResult alone = check_refined(mesh, original);
+      CHECK(check_refined(mesh, original, &facts).failure == alone.failure);
+      CHECK((what == "honest") == alone.ok);
+    }
+    // Facts are believed for the mesh they describe (a forged volume is
+    // reported) and ignored for any other (another mesh of the same sizes,
+    // or this one after a cell was added).
+    CellFacts facts;
+    quality_with_cell_facts(m, facts);
+    CellFacts forged = facts;
+    forged.volume *= 1.5;
+    INFO("dim " << dim);
+    CHECK_THAT(check_refined(m, original, &forged).failure, StartsWith("volume changed"));
+    const Mesh &moved_mesh = cases[1].second;
+    CHECK(check_refined(moved_mesh, original, &facts).failure ==
+          check_refined(moved_mesh, original).failure);
+    Mesh grown = m;
+    grown.cells.insert(grown.cells.end(), m.cells.begin(), m.cells.begin() + n);
+    facts.cells = grown.cells.data();
+    facts.coords = grown.coords.data();
+    CHECK(!facts.describe(grown));
+    CHECK(check_refined(grown, original, &facts).failure == check_refined(grown, original).failure);
+    CHECK(!check_refined(grown, original).ok);
+  }
+}
