@@ -21,6 +21,13 @@ std::vector<CellId> corner(const Mesh &m) {
   return out;
 }
 
+// A Kuhn mesh of [0,1]^dim, marked.
+Mesh marked_kuhn(int dim) {
+  Mesh m = generate_kuhn(dim, dim == 4 ? 3 : 6);
+  mark_mesh(m, Marking::Index);
+  return m;
+}
+
 } // namespace
 
 TEST_CASE("driver: a read-only callback lets the last quality pass take the final check's cell "
@@ -28,8 +35,7 @@ TEST_CASE("driver: a read-only callback lets the last quality pass take the fina
           "[driver][2d][3d][4d]") {
   for (int dim : {2, 3, 4}) {
     INFO("dim " << dim);
-    Mesh start = generate_kuhn(dim, dim == 4 ? 3 : 6);
-    mark_mesh(start, Marking::Index);
+    const Mesh start = marked_kuhn(dim);
     DriverOptions options;
     options.iterations = dim == 4 ? 4 : 6;
     std::vector<Mesh> meshes;
@@ -59,8 +65,7 @@ TEST_CASE("driver: a callback that may change the mesh is checked after it: a ce
           "[driver][2d][3d][4d]") {
   for (int dim : {2, 3, 4}) {
     INFO("dim " << dim);
-    Mesh m = generate_kuhn(dim, dim == 4 ? 3 : 6);
-    mark_mesh(m, Marking::Index);
+    Mesh m = marked_kuhn(dim);
     DriverOptions options;
     options.iterations = 3;
     // One cell's second vertex moved onto its first, in place (the arrays
