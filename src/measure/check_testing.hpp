@@ -24,4 +24,9 @@ void set_walk_chunk_bytes(std::size_t bytes);
 // takes the wider packing it uses for larger meshes instead.
 void use_wide_final_walk(bool on);
 
+// The overlap search (find_overlap in check.cpp) reads a small grid per
+// group of cells; with `on`, every cell makes its own range search instead
+// (what a cell at a group's edge does), so a test can compare the two.
+void use_own_overlap_search(bool on);
+
 } // namespace bisect::testing

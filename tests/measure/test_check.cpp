@@ -859,6 +859,39 @@ TEST_CASE("overlap: the same finding for 1, 2 and 3 threads, the smallest pair o
   set_threads(0);
 }
 
+TEST_CASE("overlap: the search by groups finds what each cell's own search finds, and the "
+          "brute force",
+          "[check][overlap][threads][2d][3d][4d]") {
+  // Many groups (2,048 centroids at most each), cells laid over the fine
+  // and the coarse part at several scales: small ones inside a cell, large
+  // ones whose boxes pass their group's (searched on their own).
+  const int dim = GENERATE(2, 3, 4);
+  const Mesh m = graded_kuhn(dim, dim == 2 ? 40 : dim == 3 ? 8 : 3);
+  INFO("dim " << dim << ", " << m.num_cells() << " cells");
+  REQUIRE(m.num_cells() > 3 * 2048);
+  int found = 0;
+  for (int k = 0; k < 12; ++k) {
+    Mesh bad = m;
+    std::vector<double> where(static_cast<std::size_t>(dim));
+    for (int d = 0; d < dim; ++d)
+      where[std::size_t(d)] = 0.05 + 0.9 * std::fmod(0.37 * (k + 1) * (d + 2), 1.0);
+    const double scale = std::array{0.3, 0.9, 2.37, 5.3}[std::size_t(k % 4)];
+    const CellId extra = add_scaled_copy(bad, where, scale);
+    const std::string expected = expected_overlap(bad, {extra}, "t.vtu");
+    found += expected != "no error";
+    INFO("case " << k << ", scale " << scale);
+    for (bool own : {false, true})
+      for (int t : {1, 2}) {
+        testing::use_own_overlap_search(own);
+        set_threads(t);
+        CHECK(prepare_error(bad, "t.vtu") == expected);
+      }
+    testing::use_own_overlap_search(false);
+    set_threads(0);
+  }
+  CHECK(found >= 9);
+}
+
 TEST_CASE("input facts: validation's invariants and interior facets are those measured apart "
           "(2D, 3D, 4D, 1-3 threads)",
           "[check][threads][2d][3d][4d]") {
