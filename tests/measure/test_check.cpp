@@ -219,6 +219,46 @@ TEST_CASE("angle condition: every single vertex id changed in a Kuhn mesh is rej
   CHECK(by_angles > 0);
 }
 
+TEST_CASE("angle condition: a star that turns twice around an interior face is rejected by the "
+          "angle sum alone",
+          "[check][2d][3d][4d]") {
+  // Five cells around a face F (a vertex, an edge, a triangle) whose
+  // vertices off F, p_i at 144 i degrees, turn twice around it: every facet
+  // through F is in two cells on opposite sides, no centroid lies strictly
+  // inside another cell (each lies on a ray another cell has as its edge),
+  // and the boundary (a pentagram) has no vertex on it: only the 720
+  // degrees around F tell.
+  const int dim = GENERATE(2, 3, 4);
+  Mesh m;
+  m.dim = dim;
+  std::vector<VertexId> face;
+  if (dim == 2)
+    face.push_back(add_vertex(m, {0, 0}));
+  if (dim == 3)
+    for (double z : {-1.0, 1.0})
+      face.push_back(add_vertex(m, {0, 0, z}));
+  if (dim == 4)
+    for (const std::vector<double> &zw :
+         std::vector<std::vector<double>>{{-1, -1}, {2, -1}, {-1, 2}})
+      face.push_back(add_vertex(m, {0, 0, zw[0], zw[1]}));
+  std::vector<VertexId> ring;
+  for (int i = 0; i < 5; ++i) {
+    std::vector<double> p(static_cast<std::size_t>(dim), 0.0);
+    p[0] = std::cos(i * 0.8 * M_PI);
+    p[1] = std::sin(i * 0.8 * M_PI);
+    ring.push_back(add_vertex(m, p));
+  }
+  for (int i = 0; i < 5; ++i) {
+    m.cells.insert(m.cells.end(), face.begin(), face.end());
+    m.cells.push_back(ring[std::size_t(i)]);
+    m.cells.push_back(ring[std::size_t((i + 1) % 5)]);
+  }
+  INFO("dim " << dim);
+  const std::string e = prepare_error(m, "t.vtu");
+  CHECK_THAT(e, StartsWith("t.vtu: tangled: the 5 cells around "));
+  CHECK_THAT(e, Contains("720"));
+}
+
 TEST_CASE("angle condition: valid meshes pass (Kuhn, perturbed, reoriented, refined, graded)",
           "[check][2d][3d][4d]") {
   const int dim = GENERATE(2, 3, 4);
