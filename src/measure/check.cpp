@@ -1138,6 +1138,17 @@ template <int Dim> bool on_facet(const double *p, const double *x) {
   return r2 <= kOnFacetTol * kOnFacetTol * size2;
 }
 
+// floor(t) within [0, n - 1]; 0 for NaN, which a coordinate difference
+// over a grid cell's size gives where both are infinite (coordinates near
+// the ends of the double range).
+inline std::int64_t grid_cell(double t, std::int64_t n) {
+  if (!(t >= 0))
+    return 0;
+  if (!(t < double(n - 1)))
+    return n - 1;
+  return std::int64_t(t);
+}
+
 template <int Dim> void gather(const Mesh &mesh, const VertexId *ids, int count, double *out) {
   for (int k = 0; k < count; ++k) {
     const double *q = mesh.point(ids[k]);
@@ -1501,10 +1512,7 @@ std::string find_hanging_node(const Mesh &mesh, const std::vector<VertexId> &bnd
     cell_size[d] = std::max(h, ext / kMaxCells);
     ncell[d] = std::int64_t(ext / cell_size[d]) + 1;
   }
-  auto index = [&](double x, int d) {
-    const double t = std::floor((x - lo[d]) / cell_size[d]);
-    return std::int64_t(std::clamp(t, 0.0, double(ncell[d] - 1)));
-  };
+  auto index = [&](double x, int d) { return grid_cell((x - lo[d]) / cell_size[d], ncell[d]); };
   auto key_of = [&](const std::int64_t *idx) {
     std::uint64_t k = 0;
     for (int d = 0; d < Dim; ++d)
@@ -1834,9 +1842,7 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
     size[d] = std::max(h / 2, (hi[d] - lo[d]) / double((std::uint64_t(1) << (kGridBits - 1)) - 1));
     ncell[d] = std::int64_t((hi[d] - lo[d]) / size[d]) + 1;
   }
-  auto grid_index = [&](double x, int d) {
-    return std::int64_t(std::clamp(std::floor((x - lo[d]) / size[d]), 0.0, double(ncell[d] - 1)));
-  };
+  auto grid_index = [&](double x, int d) { return grid_cell((x - lo[d]) / size[d], ncell[d]); };
 
   // Quantization for the keys: monotone in each coordinate, so a point in a
   // box quantizes into the quantized box.
@@ -1847,7 +1853,7 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
     scale[d] = hi[d] > lo[d] ? top / (hi[d] - lo[d]) : 0.0;
   auto quantize = [&](const double *x, std::uint32_t *q) {
     for (int d = 0; d < Dim; ++d)
-      q[d] = std::uint32_t(std::clamp(std::floor((x[d] - lo[d]) * scale[d]), 0.0, top));
+      q[d] = std::uint32_t(grid_cell((x[d] - lo[d]) * scale[d], std::int64_t(top) + 1));
   };
 
   // The centroids in key order.
@@ -2034,10 +2040,7 @@ template <int Dim> std::string find_overlap(const Mesh &mesh) {
           total *= std::size_t(cells[d]);
         }
       }
-      auto index = [&](double x, int d) {
-        return std::int64_t(
-            std::clamp(std::floor((x - ulo[d]) / cell[d]), 0.0, double(cells[d] - 1)));
-      };
+      auto index = [&](double x, int d) { return grid_cell((x - ulo[d]) / cell[d], cells[d]); };
       start.assign(total + 1, 0);
       slot.resize(near.size());
       for (std::size_t k = 0; k < near.size(); ++k) {
