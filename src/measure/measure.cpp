@@ -39,46 +39,6 @@ template <int Dim> void cell_points_t(const Mesh &mesh, CellId c, double *out) {
   }
 }
 
-template <int Dim> QualitySummary quality_summary_t(const Mesh &mesh) {
-  const std::size_t nc = mesh.num_cells();
-  QualitySummary s;
-  if (nc == 0)
-    return s;
-  // Blocks of cells summed in block order: the same figures for every
-  // thread count.
-  constexpr std::size_t kBlock = std::size_t(1) << 14, kAhead = 8;
-  const std::size_t blocks = (nc + kBlock - 1) / kBlock;
-  std::vector<double> lo(blocks, 1e300), hi(blocks, -1e300), sum(blocks, 0.0);
-  const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
-#pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
-  for (std::size_t k = 0; k < blocks; ++k) {
-    double pts[(Dim + 1) * Dim], a = 1e300, b = -1e300, total = 0;
-    const std::size_t end = std::min(nc, (k + 1) * kBlock);
-    for (std::size_t c = k * kBlock; c < end; ++c) {
-      if (c + kAhead < end)
-        geometry::prefetch_points<Dim>(mesh, CellId(c + kAhead));
-      cell_points_t<Dim>(mesh, CellId(c), pts);
-      const double q = mean_ratio_t<Dim>(pts);
-      a = std::min(a, q);
-      b = std::max(b, q);
-      total += q;
-    }
-    lo[k] = a;
-    hi[k] = b;
-    sum[k] = total;
-  }
-  s.min = 1e300;
-  s.max = -1e300;
-  double total = 0;
-  for (std::size_t k = 0; k < blocks; ++k) {
-    s.min = std::min(s.min, lo[k]);
-    s.max = std::max(s.max, hi[k]);
-    total += sum[k];
-  }
-  s.mean = total / double(nc);
-  return s;
-}
-
 // ---- similarity classes ----------------------------------------------------
 
 constexpr int num_edges(int dim) {
@@ -207,11 +167,7 @@ void cell_points(const Mesh &mesh, CellId c, double *out) {
   dispatch(mesh.dim, [&]<int D>() { cell_points_t<D>(mesh, c, out); });
 }
 
-QualitySummary quality_summary(const Mesh &mesh) {
-  if (mesh.num_cells() == 0)
-    return {};
-  return dispatch(mesh.dim, [&]<int D>() { return quality_summary_t<D>(mesh); });
-}
+// quality_summary is in check.cpp: the cell pass of the checks computes it.
 
 std::vector<long long> similarity_key(const double *verts, int dim) {
   return dispatch(dim, [&]<int D>() {
