@@ -6,6 +6,8 @@
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
 #include "bisect/state.hpp"
+#include "bisect/threads.hpp"
+#include "engine/refine_testing.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -499,4 +501,113 @@ TEST_CASE("refine with edges to split: bisecting the edges a selection bisected 
       REQUIRE(none.num_vertices() == m0.num_vertices());
     }
   }
+}
+
+// ---- the parallel kernel (refine.cpp, Refiner::bisect_all) ----
+
+namespace {
+
+// Runs `iterations` rounds (a region's selection, or every cell when the
+// region is empty) with the kernel in `mode` (testing::set_parallel_bisection)
+// on `threads` threads.
+Mesh run_kernel(Mesh m, const std::string &region_json, int iterations, int mode, int threads) {
+  testing::set_parallel_bisection(mode);
+  set_threads(threads);
+  std::unique_ptr<Region> region;
+  if (!region_json.empty())
+    region = parse_region(region_json, m.dim, "test");
+  for (int it = 0; it < iterations; ++it) {
+    std::vector<CellId> sel;
+    if (region)
+      sel = select_cells(m, *region);
+    else
+      for (std::size_t c = 0; c < m.num_cells(); ++c)
+        sel.push_back(CellId(c));
+    refine(m, sel);
+  }
+  testing::set_parallel_bisection(0);
+  set_threads(0);
+  return m;
+}
+
+void require_same_mesh(const Mesh &a, const Mesh &b) {
+  REQUIRE(a.cells == b.cells);
+  REQUIRE(a.coords == b.coords);
+  REQUIRE(a.parent_edge == b.parent_edge);
+  REQUIRE(a.level == b.level);
+  REQUIRE(a.stage == b.stage);
+  REQUIRE(a.tag == b.tag);
+  REQUIRE(a.generation == b.generation);
+  REQUIRE(a.cell_data.size() == b.cell_data.size());
+  for (std::size_t k = 0; k < a.cell_data.size(); ++k)
+    REQUIRE(a.cell_data[k].values == b.cell_data[k].values);
+  REQUIRE(a.entities.size() == b.entities.size());
+  for (std::size_t k = 0; k < a.entities.size(); ++k) {
+    REQUIRE(a.entities[k].vertices == b.entities[k].vertices);
+    REQUIRE(a.entities[k].data.size() == b.entities[k].data.size());
+    for (std::size_t j = 0; j < a.entities[k].data.size(); ++j)
+      REQUIRE(a.entities[k].data[j].values == b.entities[k].data[j].values);
+  }
+}
+
+} // namespace
+
+TEST_CASE("parallel kernel: bisecting a pass's cells on all threads gives the serial loop's mesh "
+          "bit for bit",
+          "[refine][threads][2d][3d][4d]") {
+  struct Case {
+    const char *name;
+    Mesh mesh;
+    std::string region; // empty: every cell
+    int iterations;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"square, sphere", load("square.msh"),
+                   R"({"type":"sphere","center":[0.5,0.5],"radius":0.3})", 8});
+  cases.push_back({"square, uniform", load("square.msh"), "", 3});
+  // passes of several thousand cells: several of the kernel's blocks
+  cases.push_back(
+      {"ball, hemisphere", load("ball.msh"),
+       R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,"normal":[1,0,0],"offset":0.5})",
+       4});
+  cases.push_back({"ball, uniform", load("ball.msh"), "", 2});
+  cases.push_back({"4D cube, sphere", generate_kuhn(4, 2),
+                   R"({"type":"sphere","center":[0.3,0.3,0.3,0.3],"radius":0.4})", 10});
+  cases.push_back({"4D cube, uniform", generate_kuhn(4, 3), "", 2});
+  // The Gmsh meshes carry tagged boundary facets, which split with the cells.
+  REQUIRE(!cases[0].mesh.entities.empty());
+  REQUIRE(!cases[2].mesh.entities.empty());
+  for (Case &c : cases)
+    for (Marking mk : kMarkings) {
+      INFO(c.name << ", marking " << marking_name(mk));
+      Mesh m = c.mesh;
+      mark_mesh(m, mk);
+      const Invariants inv = measure_invariants(m);
+      const Mesh serial = run_kernel(m, c.region, c.iterations, -1, 1);
+      REQUIRE(serial.num_cells() > 2 * m.num_cells());
+      for (int threads : {1, 2, 3}) {
+        INFO(threads << " threads");
+        const Mesh parallel = run_kernel(m, c.region, c.iterations, 1, threads);
+        require_same_mesh(parallel, serial);
+      }
+      REQUIRE_CONFORMING(serial, inv);
+    }
+}
+
+TEST_CASE("parallel kernel: a cell past 65535 generations is refused as in the serial loop",
+          "[refine][threads][2d]") {
+  Mesh m = generate_kuhn(2, 8);
+  mark_mesh(m, Marking::Index);
+  refine(m, {}); // starts the tree
+  m.generation[77] = std::numeric_limits<std::uint16_t>::max();
+  for (int mode : {-1, 1}) {
+    INFO("mode " << mode);
+    testing::set_parallel_bisection(mode);
+    Mesh copy = m;
+    std::vector<CellId> all(copy.num_cells());
+    for (std::size_t c = 0; c < all.size(); ++c)
+      all[c] = CellId(c);
+    REQUIRE_THROWS_WITH(refine(copy, all), "a cell would pass 65535 generations of bisection");
+  }
+  testing::set_parallel_bisection(0);
 }
