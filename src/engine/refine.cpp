@@ -691,9 +691,12 @@ private:
   // except labels: an integer array's value where both ends share it, else
   // label_sentinel; is_label_array's arrays (colour, slice) always kNoLabel.
   void finish() {
+    const int workers = threads();
     for (DataArray &a : m_.cell_data) {
       const std::size_t k = a.components;
       a.values.resize(m_.num_cells() * k);
+      // origin_ names input cells only, which keep their values
+#pragma omp parallel for num_threads(workers) schedule(static) if (origin_.size() > (1u << 16))
       for (std::size_t i = 0; i < origin_.size(); ++i)
         for (std::size_t j = 0; j < k; ++j)
           a.values[(nc0_ + i) * k + j] = a.values[std::size_t(origin_[i]) * k + j];
