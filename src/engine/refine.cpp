@@ -499,13 +499,13 @@ private:
     const VertexId z = midpoint(a, b);
     if (splitter_)
       splitter_->split(x, N, a, b, z);
-    const std::size_t at = m_.num_cells();
-    m_.cells.resize((at + 1) * N);
-    m_.stage.push_back(s);
-    m_.tag.push_back(0);
-    m_.generation.push_back(0);
-    origin_.push_back(0);
-    place_children(c, z, at, &e);
+    VertexId c2[N];
+    const Child child = place_children(c, z, c2, &e);
+    m_.cells.insert(m_.cells.end(), c2, c2 + N);
+    m_.stage.push_back(child.stage);
+    m_.tag.push_back(child.tag);
+    m_.generation.push_back(child.generation);
+    origin_.push_back(c < nc0_ ? c : origin_[c - nc0_]);
   }
 
   // Whether a pass of `count` bisections runs on all threads (bisect_all):
@@ -635,16 +635,27 @@ private:
           std::atomic_ref<std::uint8_t>(endpoint_[a]).store(1, std::memory_order_relaxed);
           std::atomic_ref<std::uint8_t>(endpoint_[e]).store(1, std::memory_order_relaxed);
         }
-        place_children(work[i], z, nc + i);
+        const std::size_t at = nc + i;
+        const Child child = place_children(work[i], z, m_.cells.data() + at * N);
+        m_.stage[at] = child.stage;
+        m_.tag[at] = child.tag;
+        m_.generation[at] = child.generation;
+        origin_[at - nc0_] = work[i] < nc0_ ? work[i] : origin_[work[i] - nc0_];
       }
   }
 
-  // Writes the children of cell c by its refinement edge (`edge`, when the
-  // caller has it, in Stage 1), whose midpoint is z: child 1 into c's slot,
-  // child 2 into slot `at` (which exists). Reads only c and the edge order,
-  // so cells may be placed from several threads at once.
-  void place_children(CellId c, VertexId z, std::size_t at, const EdgePick *edge = nullptr) {
-    VertexId x[N], c1[N], c2[N];
+  // The children of cell c by its refinement edge (`edge`, when the caller
+  // has it, in Stage 1), whose midpoint is z: child 1 replaces c in its
+  // slot, child 2 goes to c2, and both get the returned stage, tag and
+  // generation (which the caller gives child 2). Reads only c and the edge
+  // order, so cells may be bisected from several threads at once.
+  struct Child {
+    Stage stage;
+    std::uint8_t tag;
+    std::uint16_t generation;
+  };
+  Child place_children(CellId c, VertexId z, VertexId *c2, const EdgePick *edge = nullptr) {
+    VertexId x[N], c1[N];
     std::copy(m_.cell(c), m_.cell(c) + N, x);
     const int t = m_.tag[c];
     Stage stage = Stage::Maubach;
@@ -656,16 +667,12 @@ private:
       const EdgePick e = edge ? *edge : opposite_edge(order_, x, Dim, t);
       opposite_children(order_, x, Dim, t, e, z, c1, c2, stage, tag);
     }
-    const std::uint16_t g = std::uint16_t(m_.generation[c] + 1);
+    const Child child{stage, std::uint8_t(tag), std::uint16_t(m_.generation[c] + 1)};
     std::copy(c1, c1 + N, m_.cell(c));
-    m_.stage[c] = stage;
-    m_.tag[c] = std::uint8_t(tag);
-    m_.generation[c] = g;
-    std::copy(c2, c2 + N, m_.cells.data() + at * N);
-    m_.stage[at] = stage;
-    m_.tag[at] = std::uint8_t(tag);
-    m_.generation[at] = g;
-    origin_[at - nc0_] = c < nc0_ ? c : origin_[c - nc0_];
+    m_.stage[c] = child.stage;
+    m_.tag[c] = child.tag;
+    m_.generation[c] = child.generation;
+    return child;
   }
 
   void undo() {
