@@ -62,22 +62,23 @@ public:
         return kNoVertex;
     }
     for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
-      if (keys_[i] == k)
-        return values_[i];
-      if (keys_[i] == 0)
+      if (slots_[i].key == k)
+        return slots_[i].value;
+      if (slots_[i].key == 0)
         return kNoVertex;
     }
   }
   // Returns the slot's value, inserting `value` when k is absent.
   VertexId insert(std::uint64_t k, VertexId value) {
-    if ((size_ + 1) * 2 > keys_.size())
+    if ((size_ + 1) * 2 > slots_.size())
       grow();
     for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
-      if (keys_[i] == k)
-        return values_[i];
-      if (keys_[i] == 0) {
-        keys_[i] = k;
-        values_[i] = value;
+      Slot &e = slots_[i];
+      if (e.key == k)
+        return e.value;
+      if (e.key == 0) {
+        e.key = k;
+        e.value = value;
         ++size_;
         if (!filter_.empty()) {
           const std::size_t h = filter_bit(k);
@@ -88,30 +89,24 @@ public:
     }
   }
   void clear() {
-    keys_.clear();
-    keys_.shrink_to_fit();
-    values_.clear();
-    values_.shrink_to_fit();
-    first_.clear();
-    first_.shrink_to_fit();
+    slots_.clear();
+    slots_.shrink_to_fit();
     std::fill(filter_.begin(), filter_.end(), 0);
     size_ = 0;
     mask_ = 0;
   }
 
   // The parallel kernel's side (Refiner::bisect_all). Room for `more`
-  // entries without growing, so that claim() never moves the arrays.
+  // entries without growing, so that claim() never moves the table.
   void reserve(std::size_t more) {
-    while ((size_ + more) * 2 > keys_.size())
+    while ((size_ + more) * 2 > slots_.size())
       grow();
-    if (first_.size() != keys_.size())
-      first_.assign(keys_.size(), kNobody);
   }
   // The slot of key k, which the calling thread inserts when no thread has:
   // safe from several threads at once, between reserve() and settle().
   std::uint32_t claim(std::uint64_t k) {
     for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
-      std::atomic_ref<std::uint64_t> key(keys_[i]);
+      std::atomic_ref<std::uint64_t> key(slots_[i].key);
       std::uint64_t seen = key.load(std::memory_order_acquire);
       if (seen == 0 && key.compare_exchange_strong(seen, k, std::memory_order_acq_rel))
         return std::uint32_t(i);
@@ -121,28 +116,36 @@ public:
   }
   // A slot claimed in this round has no value yet; `who` (an index into the
   // round's work) bids to be its first claimant, the smallest index wins.
-  bool fresh(std::uint32_t s) const { return values_[s] == kNoVertex; }
+  bool fresh(std::uint32_t s) const { return slots_[s].value == kNoVertex; }
   void bid(std::uint32_t s, std::uint32_t who) {
-    std::atomic_ref<std::uint32_t> f(first_[s]);
+    std::atomic_ref<std::uint32_t> f(slots_[s].first);
     std::uint32_t seen = f.load(std::memory_order_relaxed);
     while (who < seen && !f.compare_exchange_weak(seen, who, std::memory_order_relaxed)) {
     }
   }
-  std::uint32_t first_bidder(std::uint32_t s) const { return first_[s]; }
+  std::uint32_t first_bidder(std::uint32_t s) const { return slots_[s].first; }
   // Gives a fresh slot its value (one thread per slot).
   void settle(std::uint32_t s, VertexId value) {
-    values_[s] = value;
-    first_[s] = kNobody;
+    slots_[s].value = value;
+    slots_[s].first = kNobody;
     if (!filter_.empty()) {
-      const std::size_t h = filter_bit(keys_[s]);
+      const std::size_t h = filter_bit(slots_[s].key);
       std::atomic_ref<std::uint64_t>(filter_[h >> 6])
           .fetch_or(std::uint64_t(1) << (h & 63), std::memory_order_relaxed);
     }
   }
-  VertexId value(std::uint32_t s) const { return values_[s]; }
+  VertexId value(std::uint32_t s) const { return slots_[s].value; }
   void add_size(std::size_t n) { size_ += n; }
 
 private:
+  static constexpr std::uint32_t kNobody = std::uint32_t(-1);
+  // Key and value side by side: a probe that finds its key reads one cache
+  // line. `first` serves the parallel kernel's bids (kNobody between rounds).
+  struct Slot {
+    std::uint64_t key = 0; // 0: empty
+    VertexId value = kNoVertex;
+    std::uint32_t first = kNobody;
+  };
   std::size_t slot(std::uint64_t k) const {
     return std::size_t((k * 0x9E3779B97F4A7C15ull) >> 20) & mask_;
   }
@@ -150,23 +153,15 @@ private:
     return std::size_t((k * 0xC2B2AE3D27D4EB4Full) >> 24) & filter_mask_;
   }
   void grow() {
-    std::vector<std::uint64_t> keys = std::move(keys_);
-    std::vector<VertexId> values = std::move(values_);
-    std::size_t cap = std::max<std::size_t>(1024, keys.size() * 2);
-    keys_.assign(cap, 0);
-    values_.assign(cap, kNoVertex);
-    if (!first_.empty())
-      first_.assign(cap, kNobody);
-    mask_ = cap - 1;
+    std::vector<Slot> old = std::move(slots_);
+    slots_.assign(std::max<std::size_t>(1024, old.size() * 2), Slot{});
+    mask_ = slots_.size() - 1;
     size_ = 0;
-    for (std::size_t i = 0; i < keys.size(); ++i)
-      if (keys[i])
-        insert(keys[i], values[i]);
+    for (const Slot &e : old)
+      if (e.key)
+        insert(e.key, e.value);
   }
-  static constexpr std::uint32_t kNobody = std::uint32_t(-1);
-  std::vector<std::uint64_t> keys_;
-  std::vector<VertexId> values_;
-  std::vector<std::uint32_t> first_;  // per slot, within a parallel round: the first claimant
+  std::vector<Slot> slots_;
   std::vector<std::uint64_t> filter_; // expect()
   std::size_t filter_mask_ = 0;
   std::size_t size_ = 0, mask_ = 0;
