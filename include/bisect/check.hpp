@@ -66,6 +66,9 @@ using InteriorFacets = std::vector<std::vector<std::array<CellId, 2>>>;
 // indices from the cells' tuples as they are now).
 void for_each_interior_facet(const Mesh &mesh, const InteriorFacets &facets,
                              const std::function<bool(CellId, int, CellId, int)> &visit);
+// The same for one piece of the record (a thread may visit each piece).
+void for_each_interior_facet(const Mesh &mesh, const std::vector<std::array<CellId, 2>> &piece,
+                             const std::function<bool(CellId, int, CellId, int)> &visit);
 
 // The cheap final check `bisect refine` runs by default before writing (a
 // fraction of check_conformity's cost): no degenerate cell; every facet in at

@@ -5,6 +5,7 @@
 
 #include "bisect/check.hpp"
 #include "bisect/measure.hpp"
+#include "bisect/threads.hpp"
 #include "core/dimension.hpp"
 #include "core/geometry.hpp"
 #include "core/names.hpp"
@@ -425,7 +426,6 @@ std::string check_state_consistency(const Mesh &mesh, const InteriorFacets *inte
     return {}; // no room for labels
   std::string failure;
   dispatch(mesh.dim, [&]<int D>() {
-    FacetWalk<D> walk(order, first_label);
     // Stevenson's reflected neighbours: two Maubach cells with one tag whose
     // tuples (or one tuple and the other's reflection) differ only in the
     // vertex opposite the facet have the same descendants on it.
@@ -449,25 +449,46 @@ std::string check_state_consistency(const Mesh &mesh, const InteriorFacets *inte
       }
       return false;
     };
-    auto visit = [&](CellId a, int i, CellId b, int j) {
-      if (reflected(a, i, b, j))
-        return true;
-      walk.record(mesh.cell(a), mesh.stage[a], mesh.tag[a], i);
-      if (walk.same(mesh.cell(b), mesh.stage[b], mesh.tag[b], j))
-        return true;
-      VertexId facet[4];
-      for (int k = 0, m = 0; k <= D; ++k)
-        if (k != i)
-          facet[m++] = mesh.cell(a)[k];
-      std::sort(facet, facet + D);
-      failure = cell_pair_name(mesh, a, b) + " would bisect their shared facet " +
+    // Stops at the first facet the two cells would bisect differently, with
+    // its message in `found`.
+    auto visitor = [&](FacetWalk<D> &walk, std::string &found) {
+      return [&](CellId a, int i, CellId b, int j) {
+        if (reflected(a, i, b, j))
+          return true;
+        walk.record(mesh.cell(a), mesh.stage[a], mesh.tag[a], i);
+        if (walk.same(mesh.cell(b), mesh.stage[b], mesh.tag[b], j))
+          return true;
+        VertexId facet[4];
+        for (int k = 0, m = 0; k <= D; ++k)
+          if (k != i)
+            facet[m++] = mesh.cell(a)[k];
+        std::sort(facet, facet + D);
+        found = cell_pair_name(mesh, a, b) + " would bisect their shared facet " +
                 face_ids(mesh, facet, D) + " differently";
-      return false;
+        return false;
+      };
     };
-    if (interior)
-      for_each_interior_facet(mesh, *interior, visit);
-    else
-      for_each_interior_facet(mesh, visit);
+    if (!interior) {
+      FacetWalk<D> walk(order, first_label);
+      for_each_interior_facet(mesh, visitor(walk, failure));
+      return;
+    }
+    // The recorded pieces by all threads; the first finding in piece order,
+    // which is the serial walk's.
+    std::vector<std::string> found(interior->size());
+    const int workers = int(std::clamp<std::size_t>(interior->size(), 1, std::size_t(threads())));
+#pragma omp parallel num_threads(workers)
+    {
+      FacetWalk<D> walk(order, first_label);
+#pragma omp for schedule(dynamic, 1)
+      for (std::size_t p = 0; p < interior->size(); ++p)
+        for_each_interior_facet(mesh, (*interior)[p], visitor(walk, found[p]));
+    }
+    for (std::string &s : found)
+      if (!s.empty()) {
+        failure = std::move(s);
+        return;
+      }
   });
   return failure;
 }

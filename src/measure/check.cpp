@@ -2772,7 +2772,7 @@ void for_each_interior_facet(const Mesh &mesh,
   });
 }
 
-void for_each_interior_facet(const Mesh &mesh, const InteriorFacets &facets,
+void for_each_interior_facet(const Mesh &mesh, const std::vector<std::array<CellId, 2>> &piece,
                              const std::function<bool(CellId, int, CellId, int)> &visit) {
   const int n = mesh.cell_size();
   // The local index in x of the vertex not in y.
@@ -2782,12 +2782,22 @@ void for_each_interior_facet(const Mesh &mesh, const InteriorFacets &facets,
         return i;
     return 0;
   };
-  for (const auto &piece : facets)
-    for (const auto &[a, b] : piece) {
-      const VertexId *x = mesh.cell(a), *y = mesh.cell(b);
-      if (!visit(a, opposite(x, y), b, opposite(y, x)))
-        return;
-    }
+  for (const auto &[a, b] : piece) {
+    const VertexId *x = mesh.cell(a), *y = mesh.cell(b);
+    if (!visit(a, opposite(x, y), b, opposite(y, x)))
+      return;
+  }
+}
+
+void for_each_interior_facet(const Mesh &mesh, const InteriorFacets &facets,
+                             const std::function<bool(CellId, int, CellId, int)> &visit) {
+  bool going = true;
+  for (const auto &piece : facets) {
+    for_each_interior_facet(
+        mesh, piece, [&](CellId a, int i, CellId b, int j) { return going = visit(a, i, b, j); });
+    if (!going)
+      return;
+  }
 }
 
 void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &progress,

@@ -7,6 +7,8 @@
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
 #include "bisect/state.hpp"
+#include "bisect/threads.hpp"
+#include "measure/check_testing.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -251,4 +253,53 @@ TEST_CASE("state: the 4D pair that skips Stage 1 is inconsistent, found before r
   REQUIRE_THAT(check_state_consistency(m), Catch::Contains("cells 0 and 1"));
   encode_state(m);
   REQUIRE_THROWS_WITH(reload(m), Catch::Contains("inconsistent"));
+}
+
+// On reading, the consistency check walks the interior facets validation
+// recorded, in pieces, on all threads; with several tampered cells it must
+// name the same facet as the serial walk over the mesh: the first in facet
+// order.
+TEST_CASE("state: the check on several threads names the first inconsistent facet, as the serial "
+          "walk does",
+          "[state][threads][3d][4d]") {
+  std::mt19937_64 rng(77);
+  for (int dim : {3, 4}) {
+    Mesh base = refined(dim, Marking::Sorted, dim == 3 ? 4 : 2, 5);
+    encode_state(base);
+    DataArray &state = array_named(base, kStateArray);
+    for (int k = 0; k < 12; ++k) { // another vertex order (rank) in 12 cells
+      const std::size_t c =
+          std::uniform_int_distribution<std::size_t>(0, base.num_cells() - 1)(rng);
+      const int w = int(state.values[c]);
+      state.values[c] = double(((w >> 4) + 1) % (dim == 3 ? 24 : 120) * 16 + (w & 15));
+    }
+    std::string serial;
+    try {
+      Mesh m = base;
+      prepare_input(m, "in.vtu");
+      decode_state(m, "in.vtu"); // no record: one walk over the mesh
+    } catch (const InputError &e) {
+      serial = e.what();
+    }
+    INFO(dim << "D, " << base.num_cells() << " cells");
+    REQUIRE_THAT(serial, Catch::Contains("inconsistent"));
+    testing::set_walk_chunk_bytes(std::size_t(1) << 14); // many pieces
+    for (int threads : {1, 2, 3}) {
+      set_threads(threads);
+      Mesh m = base;
+      InputFacts facts;
+      facts.want_interior = true;
+      prepare_input(m, "in.vtu", {}, &facts);
+      REQUIRE(facts.interior.size() > 4);
+      std::string message;
+      try {
+        decode_state(m, "in.vtu", &facts.interior);
+      } catch (const InputError &e) {
+        message = e.what();
+      }
+      CHECK(message == serial);
+    }
+    set_threads(0);
+    testing::set_walk_chunk_bytes(0);
+  }
 }
