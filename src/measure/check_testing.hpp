@@ -29,4 +29,8 @@ void use_wide_final_walk(bool on);
 // (what a cell at a group's edge does), so a test can compare the two.
 void use_own_overlap_search(bool on);
 
+// The angle check's quick atan2(y, x) for y >= 0 (rough_angle in check.cpp),
+// which must stay within 2e-5 of std::atan2 for its shortcut to be safe.
+double rough_angle(double y, double x);
+
 } // namespace bisect::testing

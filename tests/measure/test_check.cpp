@@ -1029,3 +1029,25 @@ TEST_CASE("final check: cell facts taken with the quality give the same quality 
     CHECK(!check_refined(grown, original).ok);
   }
 }
+
+TEST_CASE("angle check: the quick atan2 stays within 2e-5 of std::atan2", "[check]") {
+  // The angle check decides an interior face by the rough sum of its
+  // wedges when that is near one turn; the shortcut is exact as long as
+  // each rough angle is within 2e-5 (a face has fewer than 10,000 cells).
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  double worst = 0;
+  auto probe = [&](double y, double x) {
+    worst = std::max(worst, std::abs(testing::rough_angle(y, x) - std::atan2(y, x)));
+  };
+  for (int i = 0; i < 200000; ++i) {
+    const double scale = std::ldexp(1.0, int(unit(rng) * 60));
+    probe(std::abs(unit(rng)) * scale, unit(rng) * scale);
+  }
+  for (double y : {0.0, 1e-300, 1.0, 1e300})
+    for (double x : {-1e300, -1.0, -1e-300, 0.0, 1e-300, 1.0, 1e300})
+      if (y != 0 || x != 0)
+        probe(y, x);
+  CHECK(worst < 2e-5);
+  CHECK(std::isnan(testing::rough_angle(0.0, 0.0))); // the exact path takes it
+}
