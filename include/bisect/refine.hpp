@@ -51,8 +51,8 @@ struct RefineResult {
 // a limit the mesh is left exactly as it was and `limit_reached` is set. The
 // undo this needs is kept only where a limit can trip: a caller's max_cells or
 // cancel, an edge near the precision limit, or 32-bit ids for a mesh within
-// 16 times its size of them (a call has never made more than 16 cells or
-// vertices per cell; were one to pass the ids without the undo, CheckError).
+// 16 times its size of them (a margin: an iteration about doubles the cells
+// it touches; were a call to pass the ids without the undo, CheckError).
 // Large passes bisect on all threads (threads.hpp), with the same result.
 RefineResult refine(Mesh &mesh, const std::vector<CellId> &selected,
                     const RefineLimits &limits = {});

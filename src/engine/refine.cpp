@@ -44,8 +44,9 @@ public:
   // filter with one hash function), for about `n` keys. Most edges find() is
   // asked about have no midpoint, and the filter, small enough to stay in
   // cache, answers for most of them without a probe of the table (3D ball,
-  // 12 iterations, 8.8 M candidate cells, one thread: refine 1.65-1.85 s
-  // without it, 1.33-1.58 s with it, runs alternated on a noisy machine).
+  // 12 iterations, 8.8 M candidate cells, one thread, refine() timed in an
+  // in-process harness: 1.65-1.85 s without it, 1.33-1.58 s with it, runs
+  // alternated on a noisy machine).
   void expect(std::size_t n) {
     std::size_t bits = std::size_t(1) << 16;
     while (bits < 4 * n)
@@ -88,14 +89,6 @@ public:
       }
     }
   }
-  void clear() {
-    slots_.clear();
-    slots_.shrink_to_fit();
-    std::fill(filter_.begin(), filter_.end(), 0);
-    size_ = 0;
-    mask_ = 0;
-  }
-
   // The parallel kernel's side (Refiner::bisect_all). Room for `more`
   // entries without growing, so that claim() never moves the table.
   void reserve(std::size_t more) {
@@ -196,8 +189,10 @@ public:
         newest == std::numeric_limits<std::uint16_t>::max() ? newest : std::uint16_t(newest + 1);
     // The undo log costs memory and keeps the kernel serial: keep it only
     // when a limit could trip: the caller's, or the 32-bit ids' for a mesh
-    // that one call could take past them (a call has never made more than
-    // 16 cells per cell: an iteration about doubles the cells it touches).
+    // that one call could take past them, taken as a mesh within 16 times
+    // its cells of them (an iteration about doubles the cells it touches;
+    // 16 is a margin, not a proven bound: past it without the log, reserve()
+    // throws before anything is written).
     logging_ = limits.max_cells != std::numeric_limits<std::size_t>::max() ||
                17 * nc0_ >= kNoCell - 1 || nv0_ + 16 * nc0_ >= limits.max_vertices || limits.cancel;
     limits_.max_cells = std::min<std::size_t>(limits.max_cells, kNoCell - 1);
@@ -375,12 +370,17 @@ private:
     }
   }
 
-  std::pair<VertexId, VertexId> refinement_edge(CellId c) const {
-    const VertexId *x = m_.cell(c);
+  // The local indices of cell c's refinement edge: (0, tag) in a Maubach
+  // cell, the consistent edge of the old sub-simplex in Stage 1 (x = its new
+  // vertices, then the old sub-simplex).
+  EdgePick refinement_pick(CellId c) const {
     if (m_.stage[c] == Stage::Maubach)
-      return {x[0], x[m_.tag[c]]};
-    const EdgePick e = opposite_edge(order_, x, Dim, m_.tag[c]);
-    return {x[e.first], x[e.second]};
+      return {0, m_.tag[c]};
+    return opposite_edge(order_, m_.cell(c), Dim, m_.tag[c]);
+  }
+  std::pair<VertexId, VertexId> refinement_edge(CellId c) const {
+    const EdgePick e = refinement_pick(c);
+    return {m_.cell(c)[e.first], m_.cell(c)[e.second]};
   }
 
   // The edge's extent over the smallest extent it may have to be bisected
@@ -487,15 +487,13 @@ private:
     }
     if (Dim == 2 && s != Stage::Maubach)
       throw CheckError("Stage 1 cell in a 2D mesh");
-    EdgePick e{0, t};
-    if (s != Stage::Maubach)
-      e = opposite_edge(order_, x, Dim, t); // x = (new vertices, old sub-simplex)
+    const EdgePick e = refinement_pick(c);
     const VertexId a = x[e.first], b = x[e.second];
     const VertexId z = midpoint(a, b);
     if (splitter_)
       splitter_->split(x, N, a, b, z);
     VertexId c2[N];
-    const Child child = place_children(c, z, c2, &e);
+    const Child child = place_children(c, e, z, c2);
     m_.cells.insert(m_.cells.end(), c2, c2 + N);
     m_.stage.push_back(child.stage);
     m_.tag.push_back(child.tag);
@@ -535,6 +533,7 @@ private:
     const std::size_t blocks = (w + kBlock - 1) / kBlock;
     const int workers = int(std::clamp<std::size_t>(blocks, 1, std::size_t(threads())));
     std::vector<std::uint32_t> slot(w);
+    std::vector<EdgePick> pick(w);
     std::vector<VertexId> ends(2 * w);
     std::vector<std::size_t> winners(blocks + 1, 0);
     // Per block: the first index with a defect, and which (kGenerations,
@@ -555,7 +554,8 @@ private:
         if constexpr (Dim == 2)
           if (m_.stage[c] != Stage::Maubach)
             note(b, i, kStage);
-        const auto [a, z] = refinement_edge(c);
+        pick[i] = refinement_pick(c);
+        const VertexId a = m_.cell(c)[pick[i].first], z = m_.cell(c)[pick[i].second];
         ends[2 * i] = a;
         ends[2 * i + 1] = z;
         const std::uint32_t s = mids_.claim(MidpointMap::key(a, z));
@@ -631,7 +631,7 @@ private:
           std::atomic_ref<std::uint8_t>(endpoint_[e]).store(1, std::memory_order_relaxed);
         }
         const std::size_t at = nc + i;
-        const Child child = place_children(work[i], z, m_.cells.data() + at * N);
+        const Child child = place_children(work[i], pick[i], z, m_.cells.data() + at * N);
         m_.stage[at] = child.stage;
         m_.tag[at] = child.tag;
         m_.generation[at] = child.generation;
@@ -639,17 +639,17 @@ private:
       }
   }
 
-  // The children of cell c by its refinement edge (`edge`, when the caller
-  // has it, in Stage 1), whose midpoint is z: child 1 replaces c in its
-  // slot, child 2 goes to c2, and both get the returned stage, tag and
-  // generation (which the caller gives child 2). Reads only c and the edge
-  // order, so cells may be bisected from several threads at once.
+  // The children of cell c by its refinement edge e (refinement_pick),
+  // whose midpoint is z: child 1 replaces c in its slot, child 2 goes to c2,
+  // and both get the returned stage, tag and generation (which the caller
+  // gives child 2). Reads only c and the edge order, so cells may be
+  // bisected from several threads at once.
   struct Child {
     Stage stage;
     std::uint8_t tag;
     std::uint16_t generation;
   };
-  Child place_children(CellId c, VertexId z, VertexId *c2, const EdgePick *edge = nullptr) {
+  Child place_children(CellId c, EdgePick e, VertexId z, VertexId *c2) {
     VertexId x[N], c1[N];
     std::copy(m_.cell(c), m_.cell(c) + N, x);
     const int t = m_.tag[c];
@@ -659,7 +659,6 @@ private:
       maubach_children<Dim>(x, t, z, c1, c2);
       tag = maubach_child_tag(t, Dim);
     } else {
-      const EdgePick e = edge ? *edge : opposite_edge(order_, x, Dim, t);
       opposite_children(order_, x, Dim, t, e, z, c1, c2, stage, tag);
     }
     const Child child{stage, std::uint8_t(tag), std::uint16_t(m_.generation[c] + 1)};
