@@ -82,6 +82,38 @@ struct DistributedMesh {
 // there are ranks or carries entities.
 DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm);
 
+// What read_pvtu_parts can add while it reads.
+struct PartsReadOptions {
+  LoadProgress progress; // hears of the first piece's load on rank 0 (LoadProgress, check.hpp)
+  bool origin = false;   // add bisect:origin: each cell's index in read_pvtu's order of cells
+};
+
+// Whether read_pvtu_parts can read the .pvtu `path`: it declares the point
+// array bisect:global_id (bisect's write_pvtu wrote it). Reads the index only.
+bool pvtu_has_global_ids(const std::string &path);
+
+// Reads the .pvtu `path` with its pieces spread over the ranks of `comm`:
+// with K pieces, rank r loads pieces [rK/P, (r+1)K/P), each validated as an
+// input file (load_mesh), merges them by coordinates, and the cells then
+// migrate to equal stretches of the Hilbert curve, as rebalance() moves them;
+// no rank holds more than its pieces and its new part. Where parts meet,
+// each rank validates its part together with the cells of other parts that
+// share a vertex with it (prepare_input and the state's consistency: a facet
+// in three cells, a hanging node or a state that disagrees across a facet
+// between pieces is refused like one within a piece). The pieces must carry
+// bisect:global_id (dense: the ids 0..N-1 once each) and the bisection
+// state, and not explicit marking; the tree's bisect:piece_* arrays when
+// present. The result is what distribute() gives for read_pvtu's mesh,
+// up to the parts' cuts and the numbering of vertices made since the run
+// that wrote the pieces began. Collective; an error is thrown on every rank
+// alike (the lowest failing rank's).
+DistributedMesh read_pvtu_parts(const std::string &path, MPI_Comm comm,
+                                const PartsReadOptions &options = {});
+
+// The whole mesh's invariants from its parts (collective): volumes summed,
+// and the boundary measure less every part's border with other parts.
+Invariants whole_invariants(const DistributedMesh &d);
+
 struct DistributedRefineResult {
   std::size_t selected = 0, bisections = 0; // over all ranks
   int rounds = 0;                           // exchanges that made some rank bisect more

@@ -78,6 +78,12 @@ Mesh read_vtu(const std::string &path);
 // arrays (bisect:parent_a and the like, which name a piece's own points) are
 // dropped: a mesh read from a .pvtu has no tree.
 Mesh read_pvtu(const std::string &path);
+// The pieces a .pvtu names, as paths (relative ones beside the .pvtu), in
+// their order; InputError naming `path` when it is no .pvtu index.
+std::vector<std::string> pvtu_pieces(const std::string &path);
+// The point arrays a .pvtu declares (its <PPointData> names): a parallel
+// read (distributed.hpp) looks for bisect:global_id before any piece.
+std::vector<std::string> pvtu_point_arrays(const std::string &path);
 void write_vtu(const std::string &path, const Mesh &mesh,
                Compression compression = Compression::Zlib);
 

@@ -25,7 +25,7 @@ namespace bisect {
 
 namespace {
 
-std::vector<std::string> piece_sources(const std::string &path) {
+std::string pvtu_text(const std::string &path) {
   std::error_code ec;
   const auto size = fs::file_size(path, ec);
   if (ec)
@@ -35,9 +35,14 @@ std::vector<std::string> piece_sources(const std::string &path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream text;
   text << in.rdbuf();
-  const std::string xml = text.str();
+  std::string xml = text.str();
   if (xml.find("PUnstructuredGrid") == std::string::npos)
     throw InputError(path, "not a parallel unstructured grid (no <PUnstructuredGrid>)");
+  return xml;
+}
+
+std::vector<std::string> piece_sources(const std::string &path) {
+  const std::string xml = pvtu_text(path);
   static const std::regex piece(R"re(<Piece\s+Source\s*=\s*"([^"]*)")re");
   std::vector<std::string> sources;
   for (auto it = std::sregex_iterator(xml.begin(), xml.end(), piece); it != std::sregex_iterator();
@@ -199,6 +204,24 @@ bool same_arrays(const std::vector<DataArray> &a, const std::vector<DataArray> &
 }
 
 } // namespace
+
+std::vector<std::string> pvtu_pieces(const std::string &path) {
+  return piece_sources(path);
+}
+
+std::vector<std::string> pvtu_point_arrays(const std::string &path) {
+  const std::string xml = pvtu_text(path);
+  std::vector<std::string> names;
+  const std::size_t open = xml.find("<PPointData"), close = xml.find("</PPointData>");
+  if (open == std::string::npos || close == std::string::npos || close < open)
+    return names;
+  const std::string section = xml.substr(open, close - open);
+  static const std::regex array(R"re(<PDataArray[^>]*\sName\s*=\s*"([^"]*)")re");
+  for (auto it = std::sregex_iterator(section.begin(), section.end(), array);
+       it != std::sregex_iterator(); ++it)
+    names.push_back((*it)[1].str());
+  return names;
+}
 
 Mesh read_pvtu(const std::string &path) {
   const std::vector<std::string> sources = piece_sources(path);

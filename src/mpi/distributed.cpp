@@ -29,10 +29,12 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
+#include <unordered_set>
 
 namespace bisect {
 
@@ -1335,12 +1337,14 @@ std::vector<int> hilbert_destinations(const DistributedMesh &d) {
 // coordinates, and who shares which is found again through a directory:
 // each vertex has a home rank (a hash of its coordinates) that hears from
 // every rank holding it and tells each of them the others. Collective.
-void migrate(DistributedMesh &d, const std::vector<int> &dest) {
+// `with_tree`: whether the parts carry the tree (-1: this part says, by
+// has_tree(); a part without cells cannot).
+void migrate(DistributedMesh &d, const std::vector<int> &dest, int with_tree = -1) {
   const Mesh &m = d.local;
   const int dim = m.dim, n = m.cell_size(), P = d.size;
   const std::size_t np = static_cast<std::size_t>(P);
   const std::size_t pw = 2 * std::size_t(dim);
-  const bool tree = m.has_tree();
+  const bool tree = with_tree < 0 ? m.has_tree() : with_tree != 0;
   const std::size_t nv = m.num_vertices();
   MPI_Comm comm = d.comm.get();
   // Each vertex's parents by coordinates (NaN: none known).
@@ -1726,6 +1730,541 @@ bool rebalance(DistributedMesh &d, const Invariants &part_original, double borde
                      "; no output written");
   migrate(d, hilbert_destinations(d));
   return true;
+}
+
+// ---------------------------------------------------------------- reading
+
+namespace {
+
+// The lowest failing rank's error (a message and its kind), thrown on every
+// rank; nothing when no rank failed. Collective.
+void throw_first(const std::string &failure, ErrorKind kind, const DistributedMesh &d) {
+  const Failure f = first_failure(failure, d.rank, d.size, d.comm.get());
+  if (f.rank == d.size)
+    return;
+  int k = int(kind);
+  MPI_Bcast(&k, 1, MPI_INT, f.rank, d.comm.get());
+  throw Error(ErrorKind(k), {}, f.message);
+}
+
+// Runs `step`, keeping its error (message and kind) for throw_first.
+template <class F> void keep_failure(std::string &failure, ErrorKind &kind, F &&step) {
+  try {
+    step();
+  } catch (const Error &e) {
+    failure = e.what();
+    kind = e.kind;
+  } catch (const std::bad_alloc &) {
+    failure = "out of memory reading the pieces";
+    kind = ErrorKind::Resource;
+  } catch (const std::exception &e) {
+    failure = e.what();
+    kind = ErrorKind::Check;
+  }
+}
+
+// Takes the array `name` out of `arrays` (its values; empty when absent).
+std::optional<DataArray> take_array(std::vector<DataArray> &arrays, const char *name) {
+  for (auto it = arrays.begin(); it != arrays.end(); ++it)
+    if (it->name == name) {
+      DataArray a = std::move(*it);
+      arrays.erase(it);
+      return a;
+    }
+  return std::nullopt;
+}
+
+bool same_layout(const std::vector<DataArray> &a, const std::vector<DataArray> &b) {
+  if (a.size() != b.size())
+    return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (a[i].name != b[i].name || a[i].components != b[i].components || a[i].type != b[i].type)
+      return false;
+  return true;
+}
+
+std::vector<DataArray> empty_like(const std::vector<DataArray> &arrays) {
+  std::vector<DataArray> out;
+  for (const DataArray &a : arrays)
+    out.push_back({a.name, a.components, {}, a.type});
+  return out;
+}
+
+// A part as the pieces give it, before migration: per vertex its global id
+// (-1: made since the run that wrote the pieces began) and, with the tree,
+// its level and parents by coordinates (its own point twice: an original).
+struct PiecePart {
+  std::vector<double> gid, level, parents, generation;
+  bool tree = false;
+  std::string first_piece; // for messages
+};
+
+// Loads pieces [first, last) of `sources` into d.local (merged by
+// coordinates) and `pp`. Throws Error naming `path`.
+void load_pieces(DistributedMesh &d, PiecePart &pp, const std::string &path,
+                 const std::vector<std::string> &sources, std::size_t first, std::size_t last,
+                 const LoadProgress &progress) {
+  Mesh &m = d.local;
+  std::optional<PointIndex> index;
+  std::vector<std::unordered_set<FaceKey, FaceKeyHash>> kept; // per block: entities taken
+  for (std::size_t i = first; i < last; ++i) {
+    const std::string &source = sources[i];
+    std::string ext = std::filesystem::path(source).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char ch) { return char(std::tolower(ch)); });
+    if (ext != ".vtu")
+      throw InputError(path, "piece " + source + " is not a .vtu file");
+    Mesh p;
+    try {
+      p = load_mesh(source, i == first ? progress : LoadProgress{});
+    } catch (const Error &e) {
+      throw Error(e.kind, path, "piece " + std::string(e.what()));
+    }
+    auto refuse = [&](const std::string &why) {
+      throw InputError(path, "piece " + source + ": " + why);
+    };
+    if (!p.marked())
+      refuse(
+          "carries no bisection state (the bisect:* cell arrays); read the .pvtu without mpirun, "
+          "or refine it from one rank");
+    if (p.marking == Marking::Explicit)
+      refuse("explicit marking (bisect:edge_rank) is read by one rank only; run without mpirun");
+    std::optional<DataArray> gid = take_array(p.point_data, kGlobalIdArray);
+    std::optional<DataArray> gen = take_array(p.cell_data, kPieceGenerationArray);
+    std::optional<DataArray> lev = take_array(p.point_data, kPieceLevelArray);
+    std::optional<DataArray> par = take_array(p.point_data, kPieceParentsArray);
+    if (!gid || gid->components != 1)
+      refuse(std::string("has no one-component point array ") + kGlobalIdArray);
+    const bool tree = gen && lev && par;
+    if ((gen || lev || par) && !tree)
+      refuse(std::string("the tree is incomplete: ") + kPieceGenerationArray + ", " +
+             kPieceLevelArray + " and " + kPieceParentsArray + " come together");
+    const int dim = p.dim;
+    const std::size_t pw = 2 * std::size_t(dim);
+    if (tree && (gen->components != 1 || lev->components != 1 || par->components != int(pw)))
+      refuse("the tree's bisect:piece_* arrays have the wrong number of components");
+    if (i == first) {
+      m.dim = dim;
+      m.marking = p.marking;
+      m.point_data = empty_like(p.point_data);
+      m.cell_data = empty_like(p.cell_data);
+      m.physical_names = p.physical_names;
+      pp.tree = tree;
+      pp.first_piece = source;
+      index.emplace(m.coords, dim);
+    } else if (p.dim != m.dim || p.marking != m.marking || tree != pp.tree ||
+               !same_layout(p.point_data, m.point_data) || !same_layout(p.cell_data, m.cell_data)) {
+      refuse("its dimension, marking, tree or point and cell arrays differ from piece " +
+             pp.first_piece + "'s");
+    }
+    auto whole = [](double x, double hi) {
+      return std::isfinite(x) && x >= 0 && x <= hi && x == std::floor(x);
+    };
+    std::vector<VertexId> to(p.num_vertices());
+    for (std::size_t v = 0; v < p.num_vertices(); ++v) {
+      const double g = gid->values[v];
+      if (!(g == -1 || whole(g, 4294967294.0)))
+        refuse(std::string(kGlobalIdArray) + " of point " + std::to_string(v) +
+               " is neither -1 nor an id below 2^32 - 1");
+      const VertexId nv = VertexId(m.num_vertices());
+      m.coords.insert(m.coords.end(), p.point(VertexId(v)), p.point(VertexId(v)) + dim);
+      const VertexId w = index->add(nv);
+      to[v] = w;
+      if (w != nv) {
+        m.coords.resize(m.coords.size() - std::size_t(dim));
+        if (pp.gid[w] != g)
+          refuse("point " + std::to_string(v) + " has another " + kGlobalIdArray +
+                 " than the same point in an earlier piece");
+        continue;
+      }
+      pp.gid.push_back(g);
+      for (std::size_t a = 0; a < p.point_data.size(); ++a) {
+        const std::size_t k = std::size_t(p.point_data[a].components);
+        m.point_data[a].values.insert(m.point_data[a].values.end(),
+                                      p.point_data[a].values.begin() + std::ptrdiff_t(v * k),
+                                      p.point_data[a].values.begin() + std::ptrdiff_t((v + 1) * k));
+      }
+      if (!tree)
+        continue;
+      const double level = lev->values[v];
+      const double *q = par->values.data() + v * pw;
+      const bool self_a = std::equal(q, q + dim, p.point(VertexId(v))),
+                 self_b = std::equal(q + dim, q + 2 * dim, p.point(VertexId(v)));
+      if (!whole(level, 65535) || (level == 0) != (self_a && self_b) || self_a != self_b)
+        refuse(std::string(kPieceLevelArray) + " and " + kPieceParentsArray + " of point " +
+               std::to_string(v) +
+               " disagree (level 0 is an original vertex, which names itself as both ends)");
+      pp.level.push_back(level);
+      if (self_a)
+        pp.parents.insert(pp.parents.end(), pw, std::numeric_limits<double>::quiet_NaN());
+      else
+        pp.parents.insert(pp.parents.end(), q, q + pw);
+    }
+    const int n = p.cell_size();
+    for (std::size_t c = 0; c < p.num_cells(); ++c) {
+      for (int k = 0; k < n; ++k)
+        m.cells.push_back(to[p.cell(CellId(c))[k]]);
+      m.stage.push_back(p.stage[c]);
+      m.tag.push_back(p.tag[c]);
+      if (tree) {
+        if (!whole(gen->values[c], 65535))
+          refuse(std::string(kPieceGenerationArray) + " of cell " + std::to_string(c) +
+                 " is not a count below 2^16");
+        pp.generation.push_back(gen->values[c]);
+      }
+    }
+    for (std::size_t a = 0; a < p.cell_data.size(); ++a)
+      m.cell_data[a].values.insert(m.cell_data[a].values.end(), p.cell_data[a].values.begin(),
+                                   p.cell_data[a].values.end());
+    // Tagged entities: a block per dimension; one on the border of two
+    // pieces is kept once.
+    for (const Entities &e : p.entities) {
+      std::size_t b = 0;
+      while (b < m.entities.size() && m.entities[b].dim != e.dim)
+        ++b;
+      if (b == m.entities.size()) {
+        m.entities.push_back({});
+        m.entities.back().dim = e.dim;
+        m.entities.back().data = empty_like(e.data);
+        kept.emplace_back();
+      } else if (!same_layout(e.data, m.entities[b].data)) {
+        refuse("its cells of dimension " + std::to_string(e.dim) +
+               " have other arrays than an earlier piece's");
+      }
+      Entities &block = m.entities[b];
+      for (std::size_t i2 = 0; i2 < e.size(); ++i2) {
+        VertexId f[4];
+        for (int k = 0; k <= e.dim; ++k)
+          f[k] = to[e.entity(i2)[k]];
+        if (!kept[b].insert(face_key(f, e.dim + 1)).second)
+          continue;
+        block.vertices.insert(block.vertices.end(), f, f + e.dim + 1);
+        for (std::size_t a = 0; a < e.data.size(); ++a) {
+          const std::size_t k = std::size_t(e.data[a].components);
+          block.data[a].values.insert(block.data[a].values.end(),
+                                      e.data[a].values.begin() + std::ptrdiff_t(i2 * k),
+                                      e.data[a].values.begin() + std::ptrdiff_t((i2 + 1) * k));
+        }
+      }
+    }
+  }
+}
+
+// Every rank's layout (dimension, marking, tree, point and cell arrays,
+// blocks of tagged entities, physical names) made one: a rank without
+// pieces takes the first loaded one's; blocks are the union over all ranks,
+// by increasing dimension. Throws on every rank when pieces differ.
+void agree_layout(DistributedMesh &d, PiecePart &pp, bool loaded, const std::string &path) {
+  Mesh &m = d.local;
+  Writer w;
+  w.put<std::uint8_t>(loaded);
+  w.put<std::int32_t>(m.dim);
+  w.put<std::uint8_t>(std::uint8_t(m.marking));
+  w.put<std::uint8_t>(pp.tree);
+  put_arrays(w, m.point_data, {});
+  put_arrays(w, m.cell_data, {});
+  w.put<std::uint64_t>(m.entities.size());
+  for (const Entities &e : m.entities) {
+    w.put<std::int32_t>(e.dim);
+    put_arrays(w, e.data, {});
+  }
+  w.put<std::uint64_t>(m.physical_names.size());
+  for (const PhysicalName &pn : m.physical_names) {
+    w.put<std::int32_t>(pn.dim);
+    w.put<std::int32_t>(pn.tag);
+    w.put(pn.name);
+  }
+  w.put(pp.first_piece);
+  int size = int(w.bytes.size());
+  std::vector<int> sizes(std::size_t(d.size)), offsets(std::size_t(d.size) + 1, 0);
+  MPI_Allgather(&size, 1, MPI_INT, sizes.data(), 1, MPI_INT, d.comm.get());
+  for (int r = 0; r < d.size; ++r)
+    offsets[std::size_t(r) + 1] = offsets[std::size_t(r)] + sizes[std::size_t(r)];
+  std::vector<char> all(std::size_t(offsets.back()));
+  MPI_Allgatherv(w.bytes.data(), size, MPI_CHAR, all.data(), sizes.data(), offsets.data(), MPI_CHAR,
+                 d.comm.get());
+  struct Layout {
+    bool loaded = false;
+    int dim = 0;
+    Marking marking = Marking::Index;
+    bool tree = false;
+    std::vector<DataArray> point, cell;
+    std::vector<Entities> blocks;
+    std::vector<PhysicalName> names;
+    std::string piece;
+  };
+  std::vector<Layout> layouts(std::size_t(d.size));
+  for (int r = 0; r < d.size; ++r) {
+    std::vector<char> bytes(all.begin() + offsets[std::size_t(r)],
+                            all.begin() + offsets[std::size_t(r) + 1]);
+    Reader rd(bytes);
+    Layout &l = layouts[std::size_t(r)];
+    l.loaded = rd.get<std::uint8_t>();
+    l.dim = rd.get<std::int32_t>();
+    l.marking = Marking(rd.get<std::uint8_t>());
+    l.tree = rd.get<std::uint8_t>();
+    l.point = get_arrays(rd);
+    l.cell = get_arrays(rd);
+    l.blocks.resize(rd.get<std::uint64_t>());
+    for (Entities &e : l.blocks) {
+      e.dim = rd.get<std::int32_t>();
+      e.data = get_arrays(rd);
+    }
+    l.names.resize(rd.get<std::uint64_t>());
+    for (PhysicalName &pn : l.names) {
+      pn.dim = rd.get<std::int32_t>();
+      pn.tag = rd.get<std::int32_t>();
+      pn.name = rd.get_string();
+    }
+    l.piece = rd.get_string();
+  }
+  const Layout *model = nullptr;
+  for (const Layout &l : layouts)
+    if (l.loaded && !model)
+      model = &l;
+  std::string failure;
+  if (loaded &&
+      (m.dim != model->dim || m.marking != model->marking || pp.tree != model->tree ||
+       !same_layout(m.point_data, model->point) || !same_layout(m.cell_data, model->cell)))
+    failure = path + ": piece " + pp.first_piece +
+              ": its dimension, marking, tree or point and cell arrays differ from piece " +
+              model->piece + "'s";
+  // The blocks: every dimension some rank has, with the first one's arrays.
+  std::map<int, const Entities *> blocks;
+  for (const Layout &l : layouts)
+    for (const Entities &e : l.blocks)
+      blocks.emplace(e.dim, &e);
+  for (const Entities &e : m.entities)
+    if (failure.empty() && !same_layout(e.data, blocks.at(e.dim)->data))
+      failure = "piece " + pp.first_piece + ": its cells of dimension " + std::to_string(e.dim) +
+                " have other arrays than another piece's";
+  throw_first(failure, ErrorKind::Input, d);
+  if (!loaded) {
+    m.dim = model->dim;
+    m.marking = model->marking;
+    m.point_data = empty_like(model->point);
+    m.cell_data = empty_like(model->cell);
+    m.physical_names = model->names;
+    pp.tree = model->tree;
+  }
+  std::vector<Entities> ordered;
+  for (const auto &[dim, e] : blocks) {
+    auto own = std::find_if(m.entities.begin(), m.entities.end(),
+                            [&](const Entities &x) { return x.dim == dim; });
+    if (own != m.entities.end()) {
+      ordered.push_back(std::move(*own));
+    } else {
+      ordered.push_back({});
+      ordered.back().dim = dim;
+      ordered.back().data = empty_like(e->data);
+    }
+  }
+  m.entities = std::move(ordered);
+}
+
+// Input vertices (a global id) first, by id, then the others as they are;
+// d.input_vertex, and the tree's arrays from the pieces' (parents by
+// coordinates, found after migrating). Throws InputError when an id names
+// two points.
+void order_part(DistributedMesh &d, PiecePart &pp, const std::string &path) {
+  Mesh &m = d.local;
+  const std::size_t nv = m.num_vertices(), dim = std::size_t(m.dim), pw = 2 * dim;
+  std::vector<VertexId> order(nv);
+  std::iota(order.begin(), order.end(), VertexId(0));
+  std::stable_sort(order.begin(), order.end(), [&](VertexId a, VertexId b) {
+    const bool ia = pp.gid[a] >= 0, ib = pp.gid[b] >= 0;
+    if (ia != ib)
+      return ia;
+    return ia && pp.gid[a] < pp.gid[b];
+  });
+  for (std::size_t i = 1; i < nv; ++i)
+    if (pp.gid[order[i]] >= 0 && pp.gid[order[i]] == pp.gid[order[i - 1]])
+      throw InputError(path, std::string(kGlobalIdArray) + " " +
+                                 std::to_string(std::uint64_t(pp.gid[order[i]])) +
+                                 " names two points");
+  std::vector<VertexId> id(nv);
+  for (std::size_t i = 0; i < nv; ++i)
+    id[order[i]] = VertexId(i);
+  std::vector<double> coords(m.coords.size());
+  for (std::size_t i = 0; i < nv; ++i)
+    std::copy_n(m.point(order[i]), dim, coords.data() + i * dim);
+  m.coords = std::move(coords);
+  for (DataArray &a : m.point_data) {
+    const std::size_t k = std::size_t(a.components);
+    std::vector<double> values(a.values.size());
+    for (std::size_t i = 0; i < nv; ++i)
+      std::copy_n(a.values.data() + order[i] * k, k, values.data() + i * k);
+    a.values = std::move(values);
+  }
+  for (VertexId &x : m.cells)
+    x = id[x];
+  for (Entities &block : m.entities)
+    for (VertexId &x : block.vertices)
+      x = id[x];
+  d.input_vertex.clear();
+  for (std::size_t i = 0; i < nv && pp.gid[order[i]] >= 0; ++i)
+    d.input_vertex.push_back(std::uint64_t(pp.gid[order[i]]));
+  if (pp.tree) {
+    m.generation.assign(pp.generation.begin(), pp.generation.end());
+    m.level.resize(nv);
+    d.parent_points.resize(nv * pw);
+    for (std::size_t i = 0; i < nv; ++i) {
+      m.level[i] = std::uint16_t(pp.level[order[i]]);
+      std::copy_n(pp.parents.data() + order[i] * pw, pw, d.parent_points.data() + i * pw);
+    }
+    m.parent_edge.assign(2 * nv, kNoVertex);
+  }
+}
+
+// Validates each part with the cells of other parts that share a vertex
+// with it, as an input file is validated (prepare_input, then the state's
+// consistency): every facet, face and star that touches the part is whole
+// there, so what the pieces' own validation could not see where they met is
+// seen by some rank. Throws InputError naming `path` on every rank.
+void validate_where_parts_meet(const DistributedMesh &d, const std::string &path) {
+  const Mesh &m = d.local;
+  const int n = m.cell_size(), dim = m.dim;
+  const std::vector<std::size_t> slot_of = neighbour_slots(d);
+  std::vector<std::vector<double>> out(d.neighbours.size());
+  std::vector<int> to;
+  for (std::size_t c = 0; c < m.num_cells(); ++c) {
+    to.clear();
+    for (int i = 0; i < n; ++i)
+      for (int r : d.sharers[m.cell(CellId(c))[i]])
+        to.push_back(r);
+    if (to.empty())
+      continue;
+    std::sort(to.begin(), to.end());
+    to.erase(std::unique(to.begin(), to.end()), to.end());
+    for (int r : to) {
+      std::vector<double> &o = out[slot_of[std::size_t(r)]];
+      o.push_back(double(std::uint8_t(m.stage[c])));
+      o.push_back(double(m.tag[c]));
+      for (int i = 0; i < n; ++i)
+        o.insert(o.end(), m.point(m.cell(CellId(c))[i]), m.point(m.cell(CellId(c))[i]) + dim);
+    }
+  }
+  const std::vector<std::vector<double>> in = trade(d, out);
+  out.clear();
+  std::string failure;
+  ErrorKind kind = ErrorKind::Input;
+  keep_failure(failure, kind, [&] {
+    Mesh ext;
+    ext.dim = dim;
+    ext.marking = m.marking;
+    ext.coords = m.coords;
+    ext.cells = m.cells;
+    ext.stage = m.stage;
+    ext.tag = m.tag;
+    PointIndex index(ext.coords, dim);
+    for (std::size_t v = 0; v < m.num_vertices(); ++v)
+      index.add(VertexId(v));
+    const std::size_t record = 2 + std::size_t(n * dim);
+    for (const std::vector<double> &cells : in)
+      for (std::size_t at = 0; at + record <= cells.size(); at += record) {
+        ext.stage.push_back(Stage(std::uint8_t(cells[at])));
+        ext.tag.push_back(std::uint8_t(cells[at + 1]));
+        for (int i = 0; i < n; ++i) {
+          const double *p = cells.data() + at + 2 + std::size_t(i * dim);
+          VertexId v = index.find(p);
+          if (v == kNoVertex) {
+            v = VertexId(ext.num_vertices());
+            ext.coords.insert(ext.coords.end(), p, p + dim);
+            index.add(v);
+          }
+          ext.cells.push_back(v);
+        }
+      }
+    encode_state(ext);
+    prepare_input(ext, path);
+    decode_state(ext, path);
+  });
+  if (!failure.empty())
+    failure += " (where the pieces meet, in rank " + std::to_string(d.rank) +
+               "'s part with the cells around it)";
+  throw_first(failure, kind, d);
+}
+
+} // namespace
+
+bool pvtu_has_global_ids(const std::string &path) {
+  const std::vector<std::string> names = pvtu_point_arrays(path);
+  return std::find(names.begin(), names.end(), kGlobalIdArray) != names.end();
+}
+
+DistributedMesh read_pvtu_parts(const std::string &path, MPI_Comm comm,
+                                const PartsReadOptions &options) {
+  DistributedMesh d;
+  MPI_Comm dup;
+  MPI_Comm_dup(comm, &dup);
+  d.comm = Communicator(dup);
+  MPI_Comm_rank(dup, &d.rank);
+  MPI_Comm_size(dup, &d.size);
+  std::string failure;
+  ErrorKind kind = ErrorKind::Input;
+  PiecePart pp;
+  bool loaded = false;
+  keep_failure(failure, kind, [&] {
+    const std::vector<std::string> sources = pvtu_pieces(path);
+    const std::size_t k = sources.size(), P = std::size_t(d.size), r = std::size_t(d.rank);
+    const std::size_t first = k * r / P, last = k * (r + 1) / P;
+    load_pieces(d, pp, path, sources, first, last, options.progress);
+    loaded = last > first;
+  });
+  throw_first(failure, kind, d);
+  agree_layout(d, pp, loaded, path);
+  keep_failure(failure, kind, [&] { order_part(d, pp, path); });
+  throw_first(failure, kind, d);
+  const bool tree = pp.tree;
+  pp = {};
+  Mesh &m = d.local;
+  // bisect:origin: the index of each cell in read_pvtu's order (pieces in
+  // order, each rank's pieces one stretch of them).
+  if (options.origin) {
+    std::uint64_t count = m.num_cells(), before = 0;
+    MPI_Exscan(&count, &before, 1, MPI_UINT64_T, MPI_SUM, dup);
+    if (d.rank == 0)
+      before = 0;
+    std::erase_if(m.cell_data, [](const DataArray &a) { return a.name == kOriginArray; });
+    DataArray origin{kOriginArray, 1, std::vector<double>(m.num_cells()), ValueType::Int32};
+    for (std::size_t c = 0; c < m.num_cells(); ++c)
+      origin.values[c] = double(before + c);
+    m.cell_data.push_back(std::move(origin));
+  }
+  const std::size_t cells = sum_ranks(m.num_cells(), dup);
+  if (cells < std::size_t(d.size))
+    throw UsageError(path + ": " + std::to_string(cells) + " cells, fewer than the " +
+                     std::to_string(d.size) + " ranks");
+  migrate(d, hilbert_destinations(d), tree); // (agree_layout made `tree` one)
+  // The global ids: 0..N-1, each once (gather() places input vertices at
+  // their ids). Each id is counted by the lowest rank holding its point.
+  std::uint64_t figures[2] = {0, 0}, top = 0;
+  for (std::size_t v = 0; v < d.input_vertex.size(); ++v) {
+    top = std::max(top, d.input_vertex[v] + 1);
+    if (d.sharers[v].empty() || d.sharers[v].front() > d.rank) {
+      ++figures[0];
+      figures[1] += d.input_vertex[v];
+    }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, figures, 2, MPI_UINT64_T, MPI_SUM, dup);
+  MPI_Allreduce(MPI_IN_PLACE, &top, 1, MPI_UINT64_T, MPI_MAX, dup);
+  const unsigned __int128 expect = (unsigned __int128)top * (top - (top > 0)) / 2;
+  if (figures[0] != top || figures[1] != std::uint64_t(expect))
+    throw InputError(path, std::string("the pieces' ") + kGlobalIdArray + " are not the ids 0.." +
+                               std::to_string(top ? top - 1 : 0) + " once each (their points: " +
+                               std::to_string(figures[0]) + "); read the .pvtu without mpirun");
+  validate_where_parts_meet(d, path);
+  return d;
+}
+
+Invariants whole_invariants(const DistributedMesh &d) {
+  const Invariants part = measure_invariants(d.local, false);
+  double figures[2] = {part.volume, part.boundary_measure - border_measure(d)};
+  MPI_Allreduce(MPI_IN_PLACE, figures, 2, MPI_DOUBLE, MPI_SUM, d.comm.get());
+  Invariants whole;
+  whole.volume = figures[0];
+  whole.boundary_measure = figures[1];
+  return whole;
 }
 
 // ---------------------------------------------------------------- select

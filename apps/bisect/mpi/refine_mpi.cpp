@@ -130,8 +130,23 @@ int run_refine_mpi(const DistributedArgs &a) {
   const bool pvtu = a.output.size() > 5 && a.output.substr(a.output.size() - 5) == ".pvtu";
   const bool quiet = a.quiet || rank != 0;
 
-  // Rank 0 reads, validates and marks; a failure there ends every rank with
-  // its exit code (only rank 0 prints it).
+  // A .pvtu that bisect wrote (its pieces carry bisect:global_id) is read by
+  // every rank, a stretch of its pieces each (read_pvtu_parts), unless an
+  // indicator must rank the input's cells together; any other input is
+  // read, validated and marked by rank 0. A failure there ends every rank
+  // with its exit code (only rank 0 prints it).
+  int parallel = 0;
+  if (rank == 0 && a.indicator.empty() && a.input.size() > 5) {
+    std::string ext = a.input.substr(a.input.size() - 5);
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    try {
+      parallel = ext == ".pvtu" && pvtu_has_global_ids(a.input);
+    } catch (const Error &) {
+      // (rank 0's read below says what is wrong)
+    }
+  }
+  MPI_Bcast(&parallel, 1, MPI_INT, 0, MPI_COMM_WORLD);
   Mesh mesh;
   Invariants original;
   std::unique_ptr<OutputSet> outputs;
@@ -156,6 +171,8 @@ int run_refine_mpi(const DistributedArgs &a) {
     }
     if (a.csv != "none")
       h_csv = outputs->add(a.csv);
+    if (parallel)
+      return;
     mesh = load_for_refinement(a.input, a.marking, quiet);
     if (!pvtu)
       check_output_format(a.output, mesh.dim, a.format);
@@ -189,8 +206,31 @@ int run_refine_mpi(const DistributedArgs &a) {
   MPI_Bcast(&dim, 1, MPI_INT, 0, MPI_COMM_WORLD);
 
   try {
-    const std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
-    DistributedMesh d = distribute(mesh, 0, MPI_COMM_WORLD);
+    std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
+    DistributedMesh d;
+    if (parallel) {
+      PartsReadOptions read_options;
+      read_options.progress = load_progress(a.input, quiet);
+      read_options.origin = a.origin;
+      d = read_pvtu_parts(a.input, MPI_COMM_WORLD, read_options);
+      // What rank 0 checks of a mesh it reads, on every rank alike.
+      dim = d.local.dim;
+      cells0 = d.global_cells;
+      verts0 = d.global_vertices;
+      original = whole_invariants(d);
+      if (!pvtu)
+        check_output_format(a.output, dim, a.format);
+      if (!a.slices.empty() && dim < 3)
+        throw UsageError("--slices needs a 3D (2D+t) or 4D mesh; " + a.input + " is 2D");
+      if (!a.region.empty())
+        (void)read_region(a.region, dim);
+      if (a.marking && *a.marking != d.local.marking && !quiet)
+        std::cerr << "bisect: " << a.input << " carries bisection state with --marking "
+                  << marking_name(d.local.marking) << "; continuing it (--marking "
+                  << marking_name(*a.marking) << " ignored)\n";
+    } else {
+      d = distribute(mesh, 0, MPI_COMM_WORLD);
+    }
     mesh = Mesh{};
     Invariants part_original = measure_invariants(d.local, false);
     double border_original = border_measure(d);
@@ -198,7 +238,8 @@ int run_refine_mpi(const DistributedArgs &a) {
     if (!quiet)
       std::cerr << "bisect: " << a.input << ": " << dim << "D, " << with_commas(cells0)
                 << " cells, " << with_commas(verts0) << " vertices, marking "
-                << marking_name(d.local.marking) << "; " << d.size << " ranks, largest part "
+                << marking_name(d.local.marking) << "; " << d.size << " ranks, "
+                << (parallel ? "its pieces read by all of them, " : "") << "largest part "
                 << "of " << with_commas(d.local.num_cells()) << " cells\n";
     std::ostringstream rows;
     rows << "iteration,cells,vertices,selected,bisections,min_quality,max_quality,mean_quality,"
@@ -409,6 +450,7 @@ int run_refine_mpi(const DistributedArgs &a) {
       j["quality_csv"] = h_csv >= 0 ? nlohmann::json(a.csv) : nlohmann::json(nullptr);
       j["dim"] = dim;
       j["ranks"] = d.size;
+      j["pieces_read_in_parallel"] = parallel != 0;
       j["marking"] = marking_name(d.local.marking);
       j["iterations"] = iterations;
       j["initial_cells"] = cells0;
