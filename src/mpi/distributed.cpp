@@ -2116,6 +2116,120 @@ void order_part(DistributedMesh &d, PiecePart &pp, const std::string &path) {
   }
 }
 
+// The rank at which a point's coordinates are known (a hash of its bits).
+int home_rank(const double *p, int dim, int size) {
+  std::uint64_t h = 0x243F6A8885A308D3ull;
+  for (int k = 0; k < dim; ++k) {
+    double x = p[k] == 0 ? 0.0 : p[k];
+    std::uint64_t b;
+    std::memcpy(&b, &x, 8);
+    h = (h ^ b) * 0x9E3779B97F4A7C15ull;
+    h ^= h >> 29;
+  }
+  return int(h % static_cast<std::uint64_t>(size));
+}
+
+// send[r] to rank r, for every r; returns what each rank sent here.
+std::vector<std::vector<double>> all_to_all(const std::vector<std::vector<double>> &send,
+                                            MPI_Comm comm) {
+  const std::size_t np = send.size();
+  std::vector<int> sc(np), rc(np), sd(np + 1, 0), rd(np + 1, 0);
+  for (std::size_t r = 0; r < np; ++r)
+    sc[r] = int(send[r].size());
+  MPI_Alltoall(sc.data(), 1, MPI_INT, rc.data(), 1, MPI_INT, comm);
+  std::vector<double> flat;
+  for (std::size_t r = 0; r < np; ++r) {
+    sd[r + 1] = sd[r] + sc[r];
+    rd[r + 1] = rd[r] + rc[r];
+    flat.insert(flat.end(), send[r].begin(), send[r].end());
+  }
+  std::vector<double> got(std::size_t(std::max(rd[np], 1)));
+  MPI_Alltoallv(flat.data(), sc.data(), sd.data(), MPI_DOUBLE, got.data(), rc.data(), rd.data(),
+                MPI_DOUBLE, comm);
+  std::vector<std::vector<double>> out(np);
+  for (std::size_t r = 0; r < np; ++r)
+    out[r].assign(got.begin() + rd[r], got.begin() + rd[r + 1]);
+  return out;
+}
+
+// The tree the pieces name (before migration: d.parent_points, m.level):
+// each made vertex the midpoint of its parent edge (within 1e-6 of the
+// edge's extent, as decode_tree asks of a .vtu), both ends points of some
+// piece, neither of a higher level. Each point is registered at its home
+// rank, which answers the queries for parents. Throws on every rank.
+void check_piece_tree(const DistributedMesh &d, const std::string &path) {
+  const Mesh &m = d.local;
+  const int dim = m.dim;
+  const std::size_t pw = 2 * std::size_t(dim), np = std::size_t(d.size);
+  std::string failure;
+  std::vector<std::vector<double>> reg(np), ask(np);
+  std::vector<std::vector<std::size_t>> asked(np); // the made vertex of each query
+  for (std::size_t v = 0; v < m.num_vertices(); ++v) {
+    const double *z = m.point(VertexId(v));
+    std::vector<double> &r = reg[std::size_t(home_rank(z, dim, d.size))];
+    r.insert(r.end(), z, z + dim);
+    r.push_back(m.level[v]);
+    const double *pq = d.parent_points.data() + v * pw;
+    if (std::isnan(pq[0]))
+      continue;
+    double extent = 0, off = 0;
+    for (int k = 0; k < dim; ++k) {
+      extent = std::max(extent, std::abs(pq[k] - pq[dim + k]));
+      off = std::max(off, std::abs(z[k] - 0.5 * (pq[k] + pq[dim + k])));
+    }
+    if (!(off <= 1e-6 * extent) && failure.empty())
+      failure = path + ": " + kPieceParentsArray + ": a point made by bisection is not the " +
+                "midpoint of the edge named as its parent";
+    for (int e = 0; e < 2; ++e) {
+      const double *p = pq + e * dim;
+      const std::size_t h = std::size_t(home_rank(p, dim, d.size));
+      ask[h].insert(ask[h].end(), p, p + dim);
+      asked[h].push_back(v);
+    }
+  }
+  const std::vector<std::vector<double>> known = all_to_all(reg, d.comm.get());
+  reg.clear();
+  const std::vector<std::vector<double>> queries = all_to_all(ask, d.comm.get());
+  ask.clear();
+  // At home: the points of all pieces and their levels; each query answered
+  // with its point's level, or -1 when no piece has the point.
+  std::vector<double> coords, levels;
+  PointIndex index(coords, dim);
+  for (const std::vector<double> &from : known)
+    for (std::size_t at = 0; at + std::size_t(dim) < from.size(); at += std::size_t(dim) + 1) {
+      const VertexId v = VertexId(levels.size());
+      coords.insert(coords.end(), from.begin() + std::ptrdiff_t(at),
+                    from.begin() + std::ptrdiff_t(at) + dim);
+      if (index.add(v) != v) {
+        coords.resize(coords.size() - std::size_t(dim));
+        continue;
+      }
+      levels.push_back(from[at + std::size_t(dim)]);
+    }
+  std::vector<std::vector<double>> replies(np);
+  for (std::size_t r = 0; r < np; ++r)
+    for (std::size_t at = 0; at + std::size_t(dim) <= queries[r].size(); at += std::size_t(dim)) {
+      const VertexId v = index.find(queries[r].data() + at);
+      replies[r].push_back(v == kNoVertex ? -1.0 : levels[v]);
+    }
+  const std::vector<std::vector<double>> answers = all_to_all(replies, d.comm.get());
+  for (std::size_t h = 0; h < np && failure.empty(); ++h)
+    for (std::size_t i = 0; i < answers[h].size(); ++i) {
+      const std::size_t v = asked[h][i];
+      if (answers[h][i] < 0) {
+        failure = path + ": " + kPieceParentsArray +
+                  ": an end of a point's parent edge is a point of no piece";
+        break;
+      }
+      if (answers[h][i] > m.level[v]) {
+        failure = path + ": " + kPieceLevelArray +
+                  ": a point is the midpoint of an edge with an end of a higher level";
+        break;
+      }
+    }
+  throw_first(failure, ErrorKind::Input, d);
+}
+
 // Validates each part with the cells of other parts that share a vertex
 // with it, as an input file is validated (prepare_input, then the state's
 // consistency): every facet, face and star that touches the part is whole
@@ -2218,6 +2332,8 @@ DistributedMesh read_pvtu_parts(const std::string &path, MPI_Comm comm,
   const bool tree = pp.tree;
   pp = {};
   Mesh &m = d.local;
+  if (tree)
+    check_piece_tree(d, path);
   // bisect:origin: the index of each cell in read_pvtu's order (pieces in
   // order, each rank's pieces one stretch of them).
   if (options.origin) {

@@ -13,6 +13,18 @@
 
 namespace bisect::cli {
 
+namespace {
+
+// Whether the parts carry the bisection tree (a part without cells has none
+// to show). Collective.
+bool any_rank_has_tree(const DistributedMesh &d) {
+  int mine = d.local.has_tree(), any = 0;
+  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_LOR, d.comm.get());
+  return any != 0;
+}
+
+} // namespace
+
 int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
   const auto t_start = std::chrono::steady_clock::now();
   // bisect coarsen ... -o X.pvtu without mpirun: one rank.
@@ -22,8 +34,22 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
   const bool pvtu = a.output.ends_with(".pvtu");
   const bool quiet = a.quiet || rank != 0;
 
-  // Rank 0 reads and validates; a failure there ends every rank with its
-  // exit code (only rank 0 prints it).
+  // A .pvtu that bisect wrote is read by every rank, a stretch of its pieces
+  // each (read_pvtu_parts; not with --check, whose Euler characteristic is
+  // the whole input's); any other input is read and validated by rank 0. A
+  // failure there ends every rank with its exit code (only rank 0 prints it).
+  int parallel = 0;
+  if (rank == 0 && !a.check && a.input.size() > 5) {
+    std::string ext = a.input.substr(a.input.size() - 5);
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    try {
+      parallel = ext == ".pvtu" && pvtu_has_global_ids(a.input);
+    } catch (const Error &) {
+      // (rank 0's read below says what is wrong)
+    }
+  }
+  MPI_Bcast(&parallel, 1, MPI_INT, 0, MPI_COMM_WORLD);
   Mesh mesh;
   Invariants original;
   std::unique_ptr<OutputSet> outputs;
@@ -37,6 +63,8 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
     outputs = std::make_unique<OutputSet>(inputs, a.force);
     if (!pvtu)
       h_mesh = outputs->add(a.output);
+    if (parallel)
+      return;
     mesh = load_mesh(a.input, load_progress(a.input, quiet));
     if (!pvtu)
       check_output_format(a.output, mesh.dim, a.format);
@@ -63,8 +91,34 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
   MPI_Bcast(&dim, 1, MPI_INT, 0, MPI_COMM_WORLD);
 
   try {
-    const std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
-    DistributedMesh d = distribute(mesh, 0, MPI_COMM_WORLD);
+    std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
+    DistributedMesh d;
+    if (parallel) {
+      PartsReadOptions read_options;
+      read_options.progress = load_progress(a.input, quiet);
+      read_options.origin = a.origin;
+      d = read_pvtu_parts(a.input, MPI_COMM_WORLD, read_options);
+      // What rank 0 checks of a mesh it reads, on every rank alike.
+      dim = d.local.dim;
+      cells0 = d.global_cells;
+      verts0 = d.global_vertices;
+      original = whole_invariants(d);
+      if (!pvtu)
+        check_output_format(a.output, dim, a.format);
+      if (!a.region.empty())
+        (void)read_region(a.region, dim);
+      if (!any_rank_has_tree(d))
+        throw InputError(a.input, "carries no bisection tree (bisect:piece_generation, "
+                                  "bisect:piece_level, bisect:piece_parents): nothing to coarsen");
+      if (!quiet)
+        std::cerr << "bisect: " << a.input << ": " << dim << "D, " << with_commas(cells0)
+                  << " cells, " << with_commas(verts0) << " vertices; its pieces read by "
+                  << (d.size == 1 ? std::string("one rank")
+                                  : "all " + std::to_string(d.size) + " ranks")
+                  << "\n";
+    } else {
+      d = distribute(mesh, 0, MPI_COMM_WORLD);
+    }
     mesh = Mesh{};
     // Each rank marks its cells as the serial coarsen marks them (a cell's
     // mark depends on the cell alone).
@@ -133,6 +187,7 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
       j["output"] = a.output;
       j["dim"] = dim;
       j["ranks"] = d.size;
+      j["pieces_read_in_parallel"] = parallel != 0;
       j["passes"] = result.passes;
       j["initial_cells"] = cells0;
       j["initial_vertices"] = verts0;
