@@ -1111,6 +1111,28 @@ Mesh gather(const DistributedMesh &d, int root) {
       if (g.parent_edge[2 * v] > g.parent_edge[2 * v + 1])
         std::swap(g.parent_edge[2 * v], g.parent_edge[2 * v + 1]);
     }
+    // Input vertices whose tree the root was not given (the parts were read
+    // from a .pvtu's pieces, read_pvtu_parts): from the parts, by
+    // coordinates; an input vertex made by bisection has its parents among
+    // the input vertices.
+    for (std::size_t v = d.input_level.size(); v < inputs; ++v) {
+      const auto [p, lv] = source[v];
+      if (p < 0)
+        continue;
+      const double *q[2] = {parent_point(p, lv, 0), parent_point(p, lv, 1)};
+      if (!q[0] || !q[1])
+        continue; // an original vertex
+      g.level[v] = parts[std::size_t(p)].level[lv];
+      for (int k = 0; k < 2; ++k) {
+        const VertexId e = at.find(q[k]);
+        if (e == kNoVertex || e >= v)
+          throw std::logic_error("gather: the parents of an input vertex made by bisection are "
+                                 "no earlier input vertices");
+        g.parent_edge[2 * v + std::size_t(k)] = e;
+      }
+      if (g.parent_edge[2 * v] > g.parent_edge[2 * v + 1])
+        std::swap(g.parent_edge[2 * v], g.parent_edge[2 * v + 1]);
+    }
   }
   for (std::size_t a = 0; a < m.point_data.size(); ++a) {
     DataArray out = parts[0].point_data[a];

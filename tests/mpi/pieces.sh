@@ -64,6 +64,14 @@ for c in "square.vtu $R/circle.json 4 3" "$ROOT/data/box-tagged.msh $R/hemispher
   parallel_read false
   /usr/bin/python3 "$same" sc.vtu dg.vtu >same.txt || { cat same.txt >&2; fail "$c: coarsen --check of the .pvtu differs"; }
 done
+# A .pvtu of a run whose input had a tree: its input vertices made by
+# bisection keep their parents through the parallel read into the gathered
+# file, so coarsening that to the end gives back the coarse square.
+"$BISECT" refine square.vtu --region "$R/circle.json" -n 2 -o t0.vtu -q -f --quality-csv none
+expect_exit 0 run_mpi 3 refine t0.vtu --region "$R/circle.json" -n 2 -o tp.pvtu -q -f --quality-csv none
+expect_exit 0 run_mpi 2 refine tp.pvtu --region "$R/circle.json" -n 2 -o tg.vtu -q -f --quality-csv none
+"$BISECT" coarsen tg.vtu --all -n 0 -o tc.vtu -q -f
+/usr/bin/python3 "$same" square.vtu tc.vtu >same.txt || { cat same.txt >&2; fail "the gathered file lost the input's tree"; }
 # A .pvtu from VTK's own parallel writer (no bisect:global_id, no state):
 # rank 0 reads and marks it, as a .vtu.
 "$BISECT" refine square.vtu --region "$R/circle.json" -n 2 -o a.vtu -q -f --quality-csv none
