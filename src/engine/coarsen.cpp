@@ -30,9 +30,11 @@
 #include "bisect/mark.hpp"
 #include "core/dimension.hpp"
 #include "core/numbering.hpp"
+#include "engine/coarsen_pass.hpp"
 #include "engine/entities.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <unordered_set>
 
 namespace bisect {
@@ -60,13 +62,22 @@ public:
   // later bisections in its star, which are of its own level: midpoints are
   // shared only within one refine call); cells and vertices are compacted
   // once at the end.
-  CoarsenPass run_pass() {
+  // `given`: the eligible vertices (coarsen_pass_among), instead of those
+  // select_newest() finds; `removed`, when set, receives removed_.
+  CoarsenPass run_pass(const std::vector<char> *given = nullptr,
+                       std::vector<char> *removed = nullptr) {
     CoarsenPass report;
     const std::size_t nc = m_.num_cells(), nv = m_.num_vertices();
     dead_.assign(nc, 0);
     removed_.assign(nv, 0);
     removed_count_ = 0;
-    select_newest();
+    if (given) {
+      eligible_.assign(nv, 0);
+      for (std::size_t v = 0; v < nv; ++v)
+        eligible_[v] = (*given)[v] && m_.parent_edge[2 * v] != kNoVertex;
+    } else {
+      select_newest();
+    }
     build_stars();
     std::vector<VertexId> work;
     for (std::size_t v = 0; v < nv; ++v)
@@ -88,6 +99,8 @@ public:
     }
     report.removed_vertices = removed_count_;
     report.merged_pairs = merged;
+    if (removed)
+      *removed = removed_;
     if (merged) {
       compact_cells();
       remove_vertices();
@@ -673,18 +686,23 @@ private:
                   a.values.begin() + w * k);
       }
       VertexId p = m_.parent_edge[2 * v], q = m_.parent_edge[2 * v + 1];
+      bool lost = false;
       if (p != kNoVertex) {
         p = id[p];
         q = id[q];
         // Cannot happen for a tree bisect made (a vertex's parents are in
         // its star until it goes); a vertex that lost one becomes original.
-        if (p == kNoVertex || q == kNoVertex)
+        if (p == kNoVertex || q == kNoVertex) {
           p = q = kNoVertex;
+          lost = true;
+        }
       }
       m_.parent_edge[2 * w] = p;
       m_.parent_edge[2 * w + 1] = q;
+      // (A part of a distributed mesh may hold a made vertex without its
+      // parents: it keeps its level.)
       if (m_.level.size() == nv)
-        m_.level[w] = p == kNoVertex ? 0 : m_.level[v];
+        m_.level[w] = lost ? 0 : m_.level[v];
       ++w;
     }
     m_.coords.resize(w * Dim);
@@ -724,6 +742,21 @@ private:
 };
 
 } // namespace
+
+CoarsenPass coarsen_pass_among(Mesh &mesh, std::vector<char> &marks,
+                               const std::vector<char> &eligible, const CoarsenOptions &options,
+                               std::vector<char> &removed) {
+  if (marks.size() != mesh.num_cells() || eligible.size() != mesh.num_vertices())
+    throw std::logic_error("coarsen_pass_among: marks or eligibility not sized for the mesh");
+  removed.assign(mesh.num_vertices(), 0);
+  if (!mesh.marked() || !mesh.has_tree())
+    return {};
+  mesh.numbering = {};
+  return dispatch(mesh.dim, [&]<int D>() {
+    Coarsener<D> c(mesh, marks, options);
+    return c.run_pass(&eligible, &removed);
+  });
+}
 
 CoarsenResult coarsen(Mesh &mesh, const std::vector<char> &marked_cells,
                       const CoarsenOptions &options,

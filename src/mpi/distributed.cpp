@@ -16,6 +16,7 @@
 #include "bisect/state.hpp"
 #include "core/faces.hpp"
 #include "core/heights.hpp"
+#include "engine/coarsen_pass.hpp"
 
 #include <algorithm>
 #include <array>
@@ -2487,61 +2488,231 @@ std::vector<CellId> select_cells(const DistributedMesh &d, const Region &region)
 
 // ---------------------------------------------------------------- coarsen
 
-CoarsenResult coarsen(DistributedMesh &d, const std::vector<char> &marks,
+namespace {
+
+// values[v] for the vertices other parts share, raised to the largest any
+// part holding the vertex has (the vertices known by their coordinates).
+// Collective.
+void max_over_sharers(const DistributedMesh &d, std::vector<double> &values) {
+  const Mesh &m = d.local;
+  const int dim = m.dim;
+  const std::vector<std::size_t> slot_of = neighbour_slots(d);
+  std::vector<std::vector<double>> out(d.neighbours.size());
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    for (int r : d.sharers[v]) {
+      std::vector<double> &o = out[slot_of[std::size_t(r)]];
+      o.insert(o.end(), m.point(VertexId(v)), m.point(VertexId(v)) + dim);
+      o.push_back(values[v]);
+    }
+  const std::vector<std::vector<double>> in = trade(d, out);
+  PointIndex index(m.coords, dim);
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    if (!d.sharers[v].empty())
+      index.add(VertexId(v));
+  for (const std::vector<double> &from : in)
+    for (std::size_t at = 0; at + std::size_t(dim) < from.size(); at += std::size_t(dim) + 1) {
+      const VertexId v = index.find(from.data() + at);
+      if (v != kNoVertex)
+        values[v] = std::max(values[v], from[at + std::size_t(dim)]);
+    }
+}
+
+// After vertices of the part went (removed[v], per vertex before): the
+// per-vertex fields of `d` beside the mesh, compacted as the mesh was.
+void drop_vertices(DistributedMesh &d, const std::vector<char> &removed,
+                   std::vector<char> &eligible) {
+  const std::size_t pw = 2 * std::size_t(d.local.dim);
+  std::size_t w = 0, wi = 0, wp = 0;
+  const std::size_t inputs = d.input_vertex.size(), known = d.parent_points.size() / pw;
+  for (std::size_t v = 0; v < removed.size(); ++v) {
+    if (removed[v])
+      continue;
+    if (w != v) // (a vector moved onto itself may come out empty)
+      d.sharers[w] = std::move(d.sharers[v]);
+    eligible[w] = eligible[v];
+    if (v < inputs)
+      d.input_vertex[wi++] = d.input_vertex[v];
+    if (v < known) {
+      std::copy_n(d.parent_points.begin() + std::ptrdiff_t(v * pw), pw,
+                  d.parent_points.begin() + std::ptrdiff_t(wp * pw));
+      ++wp;
+    }
+    ++w;
+  }
+  d.sharers.resize(w);
+  eligible.resize(w);
+  d.input_vertex.resize(wi);
+  d.parent_points.resize(wp * pw);
+}
+
+// The input ids of the parts' vertices made 0..N-1 again, in their order,
+// after coarsening removed some (gather() and write_pvtu() want them dense).
+// Each id has a home rank (ranges of ids, in rank order) that counts the
+// distinct ids it hears of; a prefix sum over the homes numbers them.
+// Collective.
+void compact_input_ids(DistributedMesh &d) {
+  MPI_Comm comm = d.comm.get();
+  std::uint64_t top = 0;
+  for (std::uint64_t id : d.input_vertex)
+    top = std::max(top, id + 1);
+  MPI_Allreduce(MPI_IN_PLACE, &top, 1, MPI_UINT64_T, MPI_MAX, comm);
+  const std::size_t np = std::size_t(d.size);
+  auto home = [&](std::uint64_t id) {
+    return std::size_t((unsigned __int128)id * np / std::max<std::uint64_t>(top, 1));
+  };
+  std::vector<std::vector<double>> ask(np);
+  for (std::uint64_t id : d.input_vertex)
+    ask[home(id)].push_back(double(id));
+  const std::vector<std::vector<double>> heard = all_to_all(ask, comm);
+  std::vector<double> ids;
+  for (const std::vector<double> &h : heard)
+    ids.insert(ids.end(), h.begin(), h.end());
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  std::uint64_t count = ids.size(), before = 0;
+  MPI_Exscan(&count, &before, 1, MPI_UINT64_T, MPI_SUM, comm);
+  if (d.rank == 0)
+    before = 0;
+  std::vector<std::vector<double>> reply(np);
+  for (std::size_t r = 0; r < np; ++r)
+    for (double id : heard[r])
+      reply[r].push_back(double(before) +
+                         double(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin()));
+  const std::vector<std::vector<double>> answers = all_to_all(reply, comm);
+  std::vector<std::size_t> at(np, 0);
+  for (std::uint64_t &id : d.input_vertex) {
+    const std::size_t h = home(id);
+    id = std::uint64_t(answers[h][at[h]++]);
+  }
+}
+
+} // namespace
+
+CoarsenResult coarsen(DistributedMesh &d, const std::vector<char> &marks_in,
                       const CoarsenOptions &options,
                       const std::function<void(const CoarsenPass &)> &on_pass) {
   MPI_Comm comm = d.comm.get();
   std::string failure;
-  if (marks.size() != d.local.num_cells())
-    failure = "coarsen: " + std::to_string(marks.size()) + " marks for a part of " +
+  if (marks_in.size() != d.local.num_cells())
+    failure = "coarsen: " + std::to_string(marks_in.size()) + " marks for a part of " +
               std::to_string(d.local.num_cells()) + " cells";
   else if (d.local.marking == Marking::Explicit)
     failure = "coarsen: a mesh with explicit marking (bisect:edge_rank) is coarsened without "
               "mpirun (its edge ranks do not travel between ranks)";
   if (const Failure f = first_failure(failure, d.rank, d.size, comm); f.rank < d.size)
     throw UsageError(f.message);
-  // The marks travel with their cells to the root.
-  constexpr const char *kMarks = "bisect:coarsen_marked";
-  d.local.cell_data.push_back(
-      {kMarks, 1, std::vector<double>(marks.begin(), marks.end()), ValueType::Int8});
-  Mesh whole;
-  try {
-    whole = gather(d, 0);
-  } catch (...) {
-    d.local.cell_data.pop_back();
-    throw;
-  }
-  d.local.cell_data.pop_back();
   CoarsenResult result;
-  if (d.rank == 0) {
-    try {
-      auto slot = std::find_if(whole.cell_data.begin(), whole.cell_data.end(),
-                               [&](const DataArray &a) { return a.name == kMarks; });
-      std::vector<char> whole_marks(whole.num_cells(), 0);
-      for (std::size_t c = 0; c < whole.num_cells(); ++c)
-        whole_marks[c] = slot->values[c] != 0;
-      whole.cell_data.erase(slot);
-      const Invariants before = measure_invariants(whole, false);
-      result = bisect::coarsen(whole, whole_marks, options, on_pass);
-      // Coarsening keeps the domain: the serial final check, as bisect coarsen.
-      const CheckResult check = check_refined(whole, before);
-      if (!check.ok)
-        failure = "after coarsening: " + check.failure;
-    } catch (const std::exception &e) {
-      failure = e.what();
+  if (!any_rank(d.local.has_tree(), comm))
+    return result;
+  // The marks and the pass's eligible vertices travel with their cells and
+  // vertices when parts move.
+  constexpr const char *kMarks = "bisect:coarsen_marked";
+  constexpr const char *kEligible = "bisect:coarsen_eligible";
+  std::vector<char> marks = marks_in, eligible;
+  auto move_cells = [&](const std::vector<int> &dest) {
+    Mesh &m = d.local;
+    m.cell_data.push_back(
+        {kMarks, 1, std::vector<double>(marks.begin(), marks.end()), ValueType::Int8});
+    m.point_data.push_back(
+        {kEligible, 1, std::vector<double>(eligible.begin(), eligible.end()), ValueType::Int8});
+    migrate(d, dest, 1);
+    std::optional<DataArray> mk = take_array(m.cell_data, kMarks);
+    std::optional<DataArray> el = take_array(m.point_data, kEligible);
+    marks.assign(mk->values.begin(), mk->values.end());
+    eligible.assign(el->values.begin(), el->values.end());
+  };
+  for (int p = 1; options.passes <= 0 || p <= options.passes; ++p) {
+    // The pass's vertices, as the whole mesh's pass finds them: made, and
+    // no vertex of their star (in any part) newer.
+    {
+      const Mesh &m = d.local;
+      const std::size_t nv = m.num_vertices();
+      const int n = m.cell_size();
+      auto level = [&](std::size_t v) -> double {
+        return m.level.size() == nv
+                   ? double(m.level[v])
+                   : double(m.parent_edge[2 * v] != kNoVertex ||
+                            !std::isnan(v * 2 * std::size_t(m.dim) < d.parent_points.size()
+                                            ? d.parent_points[v * 2 * m.dim]
+                                            : std::nan("")));
+      };
+      std::vector<double> around(nv, 0.0);
+      for (std::size_t c = 0; c < m.num_cells(); ++c) {
+        double top = 0;
+        for (int i = 0; i < n; ++i)
+          top = std::max(top, level(m.cell(CellId(c))[i]));
+        for (int i = 0; i < n; ++i)
+          around[m.cell(CellId(c))[i]] = std::max(around[m.cell(CellId(c))[i]], top);
+      }
+      max_over_sharers(d, around);
+      eligible.assign(nv, 0);
+      for (std::size_t v = 0; v < nv; ++v)
+        eligible[v] = level(v) > 0 && level(v) >= around[v];
     }
+    std::uint64_t figures[2] = {0, 0}; // removed vertices, merged pairs
+    // Rounds: each part runs the pass among the vertices no other part
+    // holds; then the cells around each vertex still waiting on a border
+    // (eligible, shared, its cells here all marked and made by bisection)
+    // move to the lowest rank holding it, and the parts run again, until no
+    // cell moves. Cells only move to lower ranks, so the rounds end.
+    for (;;) {
+      Mesh &m = d.local;
+      const std::size_t nv = m.num_vertices();
+      std::vector<char> among(nv), removed;
+      for (std::size_t v = 0; v < nv; ++v)
+        among[v] = eligible[v] && d.sharers[v].empty();
+      const CoarsenPass cp = coarsen_pass_among(m, marks, among, options, removed);
+      figures[0] += cp.removed_vertices;
+      figures[1] += cp.merged_pairs;
+      if (cp.removed_vertices)
+        drop_vertices(d, removed, eligible);
+      const int n = m.cell_size();
+      std::vector<char> ready(m.num_vertices(), 1);
+      for (std::size_t c = 0; c < m.num_cells(); ++c)
+        if (!marks[c] || m.generation[c] == 0)
+          for (int i = 0; i < n; ++i)
+            ready[m.cell(CellId(c))[i]] = 0;
+      std::vector<int> dest(m.num_cells(), d.rank);
+      bool moving = false;
+      for (std::size_t c = 0; c < m.num_cells(); ++c)
+        for (int i = 0; i < n; ++i) {
+          const VertexId x = m.cell(CellId(c))[i];
+          if (eligible[x] && ready[x] && !d.sharers[x].empty() && d.sharers[x].front() < dest[c]) {
+            dest[c] = d.sharers[x].front();
+            moving = true;
+          }
+        }
+      if (!any_rank(moving, comm))
+        break;
+      move_cells(dest);
+    }
+    MPI_Allreduce(MPI_IN_PLACE, figures, 2, MPI_UINT64_T, MPI_SUM, comm);
+    count_global(d);
+    CoarsenPass pass;
+    pass.pass = p;
+    pass.removed_vertices = figures[0];
+    pass.merged_pairs = figures[1];
+    pass.cells = d.global_cells;
+    pass.vertices = d.global_vertices;
+    if (on_pass && d.rank == 0)
+      on_pass(pass);
+    if (pass.removed_vertices == 0)
+      break;
+    result.passes = p;
+    result.removed_vertices += pass.removed_vertices;
+    result.merged_pairs += pass.merged_pairs;
+    if (imbalance(d) > 1.1)
+      move_cells(hilbert_destinations(d));
   }
-  failure = broadcast(failure, 0, comm);
-  if (!failure.empty())
-    throw CheckError(failure);
-  std::uint64_t figures[3] = {std::uint64_t(result.passes), result.removed_vertices,
-                              result.merged_pairs};
-  MPI_Bcast(figures, 3, MPI_UINT64_T, 0, comm);
-  result.passes = int(figures[0]);
-  result.removed_vertices = figures[1];
-  result.merged_pairs = figures[2];
-  DistributedMesh fresh = distribute(whole, 0, comm);
-  d = std::move(fresh);
+  // The input's ids without the removed vertices; the root's copy of the
+  // input's tree names the old ids (gather() takes the tree from the parts).
+  compact_input_ids(d);
+  d.input_parent_edge.clear();
+  d.input_level.clear();
+  if (imbalance(d) > 1.1) {
+    eligible.assign(d.local.num_vertices(), 0);
+    move_cells(hilbert_destinations(d));
+  }
   return result;
 }
 
