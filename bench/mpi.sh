@@ -54,3 +54,24 @@ done
 echo "weak scaling (about 2.6-3.3 M pentatopes per rank):"
 run 1 24 "  weak"
 run 2 25 "  weak"
+# Reading the .pvtu back and coarsening it: the strong run's 2-piece output
+# (P = 2), read by every rank (pieces_read_in_parallel) and coarsened on every
+# part, against the serial coarsening of the serial output.
+mpirun --allow-run-as-root --oversubscribe -np 2 "$M" refine hypercube.vtu --region "$region" \
+  -n 25 -m longest -o out.pvtu -q -f --quality-csv none --threads 1
+echo "coarsening 3 passes (--all) of the 25-iteration mesh, one thread per rank:"
+"$S" coarsen s.vtu --all -n 3 -o sc.vtu -q -f --json --threads 1 >c.json
+/usr/bin/python3 -c "import json; j=json.load(open('c.json')); print(f\"  serial, from s.vtu: {j['cells']:,} pentatopes left in {j['seconds']:.2f} s\")"
+for p in 1 2 4; do
+  over=""
+  ((p > cores)) && over=" (oversubscribed)"
+  mpirun --allow-run-as-root --oversubscribe -np "$p" "$M" coarsen out.pvtu --all -n 3 -o c.pvtu -q -f \
+    --json --threads 1 >c.json
+  /usr/bin/python3 - "$p" "$over" <<'PY'
+import json, sys
+j = json.load(open("c.json"))
+print(f"  P={sys.argv[1]}{sys.argv[2]}, from out.pvtu (pieces read in parallel: {j['pieces_read_in_parallel']}): "
+      f"{j['cells']:,} pentatopes left in {j['seconds']:.2f} s, "
+      f"peak RSS of the largest rank {j['peak_rss_bytes_max_rank'] / 2**20:.0f} MiB")
+PY
+done

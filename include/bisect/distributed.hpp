@@ -188,16 +188,23 @@ bool rebalance(DistributedMesh &d, const Invariants &part_original, double borde
                double tolerance = 0.1);
 
 // coarsen() (coarsen.hpp) across ranks: `marks` has one entry per cell of
-// d.local (non-zero: may be merged away). Collective. The passes run on the
-// root today: the parts are gathered there (gather(), with the marks), the
-// serial passes run and the result must pass check_refined against the
-// gathered mesh's invariants (else CheckError on every rank), and the
-// coarsened mesh is distributed again along the Hilbert curve, so the result
-// is the serial coarsening's for every number of ranks; the root holds the
-// whole mesh meanwhile, as rebalance() does. `on_pass` is called on the
-// root. The parts' own invariants and border_measure() must then be taken
-// again. Throws UsageError for explicit marking (its edge ranks do not
-// travel).
+// d.local (non-zero: may be merged away). Collective. Every part coarsens its
+// own cells; no rank gathers the mesh. Each pass first finds the vertices
+// the whole mesh's pass would consider (made, no newer vertex in their star
+// on any part), then runs in rounds: each part runs the serial pass among
+// those no other part holds (every cell around them is here); then the
+// cells around each such vertex still on a border (its cells here all
+// marked and made by bisection) move to the lowest rank holding it, and the
+// parts run again, until no cell moves (cells only move to lower ranks, so
+// the rounds end). A pass's outcome does not depend on the order its
+// vertices go in, so the result is the serial coarsening's for every number
+// of ranks (cells as sets of coordinates). Between passes and at the end,
+// parts more than 10% above the mean are made again along the Hilbert
+// curve; the input ids of the vertices left are made 0..N-1 again (the
+// root's copy of the input's tree is dropped: gather() takes the tree from
+// the parts). `on_pass` is called on rank 0 with the whole mesh's figures.
+// The parts' own invariants and border_measure() must then be taken again.
+// Throws UsageError for explicit marking (its edge ranks do not travel).
 CoarsenResult coarsen(DistributedMesh &d, const std::vector<char> &marks,
                       const CoarsenOptions &options = {},
                       const std::function<void(const CoarsenPass &)> &on_pass = {});

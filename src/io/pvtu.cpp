@@ -8,6 +8,7 @@
 #include "bisect/state.hpp"
 #include "core/faces.hpp"
 #include "core/heights.hpp"
+#include "core/reorder.hpp"
 
 #include <algorithm>
 #include <array>
@@ -145,26 +146,7 @@ void tree_from_pieces(Mesh &out, std::size_t fixed, const std::string &path) {
   std::stable_sort(order.begin() + std::ptrdiff_t(fixed), order.end(), [&](VertexId a, VertexId b) {
     return level[a] != level[b] ? level[a] < level[b] : height[a] < height[b];
   });
-  std::vector<VertexId> id(nv);
-  for (std::size_t i = 0; i < nv; ++i)
-    id[order[i]] = VertexId(i);
-  // Renumber the mesh.
-  std::vector<double> coords(out.coords.size());
-  for (std::size_t i = 0; i < nv; ++i)
-    std::copy_n(out.point(order[i]), dim, coords.data() + i * std::size_t(dim));
-  out.coords = std::move(coords);
-  for (DataArray &a : out.point_data) {
-    const std::size_t k = std::size_t(a.components);
-    std::vector<double> values(a.values.size());
-    for (std::size_t i = 0; i < nv; ++i)
-      std::copy_n(a.values.data() + order[i] * k, k, values.data() + i * k);
-    a.values = std::move(values);
-  }
-  for (VertexId &x : out.cells)
-    x = id[x];
-  for (Entities &block : out.entities)
-    for (VertexId &x : block.vertices)
-      x = id[x];
+  const std::vector<VertexId> id = reorder_vertices(out, order);
   // The tree's arrays (state.hpp), the piece arrays dropped.
   DataArray pa{kParentAArray, 1, std::vector<double>(nv, -1.0), ValueType::Int32};
   DataArray pb{kParentBArray, 1, std::vector<double>(nv, -1.0), ValueType::Int32};

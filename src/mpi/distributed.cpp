@@ -16,6 +16,7 @@
 #include "bisect/state.hpp"
 #include "core/faces.hpp"
 #include "core/heights.hpp"
+#include "core/reorder.hpp"
 #include "engine/coarsen_pass.hpp"
 
 #include <algorithm>
@@ -290,6 +291,19 @@ std::vector<int> hilbert_parts(const Mesh &m, int parts) {
 }
 
 // ---------------------------------------------------------------- helpers
+
+// The rank at which a point's coordinates are known (a hash of its bits).
+int home_rank(const double *p, int dim, int size) {
+  std::uint64_t h = 0x243F6A8885A308D3ull;
+  for (int k = 0; k < dim; ++k) {
+    double x = p[k] == 0 ? 0.0 : p[k];
+    std::uint64_t b;
+    std::memcpy(&b, &x, 8);
+    h = (h ^ b) * 0x9E3779B97F4A7C15ull;
+    h ^= h >> 29;
+  }
+  return int(h % static_cast<std::uint64_t>(size));
+}
 
 std::vector<int> intersect(const std::vector<int> &a, const std::vector<int> &b) {
   std::vector<int> out;
@@ -1649,17 +1663,7 @@ void migrate(DistributedMesh &d, const std::vector<int> &dest, int with_tree = -
   // Who else holds each vertex: a directory, each vertex at the home rank
   // its coordinates hash to.
   const Mesh &nm = d.local;
-  auto home = [&](const double *p) {
-    std::uint64_t h = 0x243F6A8885A308D3ull;
-    for (int k = 0; k < dim; ++k) {
-      double x = p[k] == 0 ? 0.0 : p[k];
-      std::uint64_t b;
-      std::memcpy(&b, &x, 8);
-      h = (h ^ b) * 0x9E3779B97F4A7C15ull;
-      h ^= h >> 29;
-    }
-    return int(h % static_cast<std::uint64_t>(P));
-  };
+  auto home = [&](const double *p) { return home_rank(p, dim, P); };
   std::vector<std::vector<double>> ask(np);
   std::vector<std::vector<VertexId>> asked(np);
   for (std::size_t v = 0; v < nm.num_vertices(); ++v) {
@@ -2105,25 +2109,7 @@ void order_part(DistributedMesh &d, PiecePart &pp, const std::string &path) {
       throw InputError(path, std::string(kGlobalIdArray) + " " +
                                  std::to_string(std::uint64_t(pp.gid[order[i]])) +
                                  " names two points");
-  std::vector<VertexId> id(nv);
-  for (std::size_t i = 0; i < nv; ++i)
-    id[order[i]] = VertexId(i);
-  std::vector<double> coords(m.coords.size());
-  for (std::size_t i = 0; i < nv; ++i)
-    std::copy_n(m.point(order[i]), dim, coords.data() + i * dim);
-  m.coords = std::move(coords);
-  for (DataArray &a : m.point_data) {
-    const std::size_t k = std::size_t(a.components);
-    std::vector<double> values(a.values.size());
-    for (std::size_t i = 0; i < nv; ++i)
-      std::copy_n(a.values.data() + order[i] * k, k, values.data() + i * k);
-    a.values = std::move(values);
-  }
-  for (VertexId &x : m.cells)
-    x = id[x];
-  for (Entities &block : m.entities)
-    for (VertexId &x : block.vertices)
-      x = id[x];
+  reorder_vertices(m, order);
   d.input_vertex.clear();
   for (std::size_t i = 0; i < nv && pp.gid[order[i]] >= 0; ++i)
     d.input_vertex.push_back(std::uint64_t(pp.gid[order[i]]));
@@ -2137,19 +2123,6 @@ void order_part(DistributedMesh &d, PiecePart &pp, const std::string &path) {
     }
     m.parent_edge.assign(2 * nv, kNoVertex);
   }
-}
-
-// The rank at which a point's coordinates are known (a hash of its bits).
-int home_rank(const double *p, int dim, int size) {
-  std::uint64_t h = 0x243F6A8885A308D3ull;
-  for (int k = 0; k < dim; ++k) {
-    double x = p[k] == 0 ? 0.0 : p[k];
-    std::uint64_t b;
-    std::memcpy(&b, &x, 8);
-    h = (h ^ b) * 0x9E3779B97F4A7C15ull;
-    h ^= h >> 29;
-  }
-  return int(h % static_cast<std::uint64_t>(size));
 }
 
 // send[r] to rank r, for every r; returns what each rank sent here.

@@ -10,6 +10,7 @@
 #include "bisect/measure.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/state.hpp"
+#include "engine/coarsen_pass.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -224,6 +225,65 @@ TEST_CASE("coarsen: one pass after N local refinements removes the newest iterat
   }
   INFO(exact << " of " << total << " exactly the mesh of iteration N - 1");
   REQUIRE(exact * 4 >= total * 3);
+}
+
+TEST_CASE("coarsen: a pass run among some of its vertices, then again among the rest, is the "
+          "whole pass",
+          "[coarsen][2d][3d][4d]") {
+  // What the distributed coarsen relies on (distributed.cpp): each part runs
+  // the pass among the vertices no other part holds, then again once the
+  // cells around the others are gathered. Here the pass's vertices (made,
+  // no newer vertex in their star) are split in two by a plane; the first
+  // run takes one side, later runs all that is left, until a run removes
+  // nothing. The cells are those of one whole pass.
+  for (Case &k : cases()) {
+    INFO(k.name << ", " << k.iterations << " iterations");
+    const Invariants inv = measure_invariants(k.mesh);
+    Mesh m = k.mesh;
+    refine_locally(m, k.iterations);
+    Mesh whole = m;
+    coarsen_all(whole, 1);
+    const std::size_t nv = m.num_vertices();
+    std::vector<std::uint16_t> around(nv, 0);
+    for (std::size_t c = 0; c < m.num_cells(); ++c) {
+      std::uint16_t top = 0;
+      for (int i = 0; i < m.cell_size(); ++i)
+        top = std::max(top, m.level[m.cell(CellId(c))[i]]);
+      for (int i = 0; i < m.cell_size(); ++i)
+        around[m.cell(CellId(c))[i]] = std::max(around[m.cell(CellId(c))[i]], top);
+    }
+    std::vector<char> eligible(nv), among(nv), removed;
+    std::size_t first_side = 0;
+    for (std::size_t v = 0; v < nv; ++v) {
+      eligible[v] = m.parent_edge[2 * v] != kNoVertex && m.level[v] >= around[v];
+      among[v] = eligible[v] && m.point(VertexId(v))[0] < 0.3;
+      first_side += among[v];
+    }
+    std::vector<char> marks(m.num_cells(), 1);
+    std::size_t runs = 0, gone = coarsen_pass_among(m, marks, among, {}, removed).removed_vertices;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (removed[v])
+        REQUIRE(among[v]); // only the first side's vertices went
+    for (;;) {
+      std::vector<char> rest;
+      for (std::size_t v = 0; v < removed.size(); ++v)
+        if (!removed[v])
+          rest.push_back(eligible[v]);
+      eligible = rest;
+      const std::size_t more = coarsen_pass_among(m, marks, eligible, {}, removed).removed_vertices;
+      ++runs;
+      if (more == 0)
+        break;
+      gone += more;
+    }
+    INFO(first_side << " vertices on the first side, " << runs << " later runs");
+    REQUIRE(first_side > 0);
+    REQUIRE(gone > first_side / 2);
+    REQUIRE_CONFORMING(m, inv);
+    REQUIRE(check_state_consistency(m).empty());
+    REQUIRE(cell_shapes(m) == cell_shapes(whole));
+    REQUIRE(vertex_set(m) == vertex_set(whole));
+  }
 }
 
 TEST_CASE("coarsen: a cycle of reused midpoints goes together", "[coarsen][3d]") {

@@ -4,24 +4,14 @@
 # output by rank 0), --slices (sections of the gathered mesh), each equal to
 # the serial run's; and the combinations that are refused, with one line.
 # $1: the bisect of a -DBISECT_MPI=ON build; $2: the source tree.
-source "$(dirname "$0")/../cli/lib.bash"
+source "$(dirname "$0")/lib.bash"
 cd "$WORK"
 R=$ROOT/data/regions
 same=$ROOT/tests/mpi/same_cells.py
-run_mpi() { # P ARGS...
-  local p=$1; shift
-  mpirun --allow-run-as-root --oversubscribe -np "$p" "$BISECT" "$@" </dev/null
-}
 "$BISECT" generate kuhn --dim 2 --cells 4 -o square.vtu -q
 "$BISECT" generate kuhn --dim 3 --cells 2 -o cube.vtu -q
 "$BISECT" generate kuhn --dim 4 --cells 1 -o hypercube.vtu -q
 echo '{"type": "sphere", "center": [0.3, 0.4, 0.2], "radius": 0.25}' >sphere.json
-# One line from bisect naming $1 (mpirun adds its own lines about the exit
-# code).
-one_bisect_line_naming() {
-  [[ $(grep -c '^bisect:' "$WORK/err") == 1 ]] || { cat "$WORK/err" >&2; fail "expected one bisect line"; }
-  grep -qF -- "$1" "$WORK/err" || { cat "$WORK/err" >&2; fail "stderr does not name '$1'"; }
-}
 n=0
 # --origin: each cell's input cell, cell by cell the serial run's; the 4D
 # case rebalances, so the array also travels with migrated cells.

@@ -8,18 +8,10 @@
 # twice, a made point moved off its parent edge's midpoint, a global id on
 # two points) are refused with one line, exit 1, nothing written.
 # $1: the bisect of a -DBISECT_MPI=ON build; $2: the source tree.
-source "$(dirname "$0")/../cli/lib.bash"
+source "$(dirname "$0")/lib.bash"
 cd "$WORK"
 R=$ROOT/data/regions
 same=$ROOT/tests/mpi/same_cells.py
-run_mpi() { # P ARGS...
-  local p=$1; shift
-  mpirun --allow-run-as-root --oversubscribe -np "$p" "$BISECT" "$@" </dev/null
-}
-one_bisect_line_naming() {
-  [[ $(grep -c '^bisect:' "$WORK/err") == 1 ]] || { cat "$WORK/err" >&2; fail "expected one bisect line"; }
-  grep -qF -- "$1" "$WORK/err" || { cat "$WORK/err" >&2; fail "stderr does not name '$1'"; }
-}
 parallel_read() { # the --json in $WORK/out says the pieces were read in parallel: $1 true|false
   grep -q "\"pieces_read_in_parallel\":$1" "$WORK/out" || { cat "$WORK/out" >&2; fail "pieces_read_in_parallel is not $1"; }
 }

@@ -1,6 +1,6 @@
 // bisect coarsen under mpirun (a BISECT_MPI build): rank 0 reads the mesh
 // and its tree, the ranks mark their parts, coarsen() of distributed.hpp
-// undoes the bisections (today through rank 0), and the result is written
+// undoes the bisections on every part, and the result is written
 // as a .pvtu with a piece per rank, or gathered into one file.
 #include "cli.hpp"
 #include "mpi/refine_mpi.hpp"
@@ -8,6 +8,9 @@
 #include "bisect/coarsen.hpp"
 #include "bisect/distributed.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <iomanip>
 #include <iostream>
 
@@ -38,18 +41,7 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
   // each (read_pvtu_parts; not with --check, whose Euler characteristic is
   // the whole input's); any other input is read and validated by rank 0. A
   // failure there ends every rank with its exit code (only rank 0 prints it).
-  int parallel = 0;
-  if (rank == 0 && !a.check && a.input.size() > 5) {
-    std::string ext = a.input.substr(a.input.size() - 5);
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    try {
-      parallel = ext == ".pvtu" && pvtu_has_global_ids(a.input);
-    } catch (const Error &) {
-      // (rank 0's read below says what is wrong)
-    }
-  }
-  MPI_Bcast(&parallel, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  const bool parallel = pieces_read_in_parallel(a.input, !a.check, rank);
   Mesh mesh;
   Invariants original;
   std::unique_ptr<OutputSet> outputs;
@@ -94,19 +86,12 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
     std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
     DistributedMesh d;
     if (parallel) {
-      PartsReadOptions read_options;
-      read_options.progress = load_progress(a.input, quiet);
-      read_options.origin = a.origin;
-      d = read_pvtu_parts(a.input, MPI_COMM_WORLD, read_options);
-      // What rank 0 checks of a mesh it reads, on every rank alike.
-      dim = d.local.dim;
-      cells0 = d.global_cells;
-      verts0 = d.global_vertices;
-      original = whole_invariants(d);
-      if (!pvtu)
-        check_output_format(a.output, dim, a.format);
-      if (!a.region.empty())
-        (void)read_region(a.region, dim);
+      PartsFacts facts;
+      d = read_input_parts(a.input, a.origin, quiet, !pvtu, a.output, a.format, a.region, facts);
+      dim = facts.dim;
+      cells0 = facts.cells;
+      verts0 = facts.vertices;
+      original = facts.whole;
       if (!any_rank_has_tree(d))
         throw InputError(a.input, "carries no bisection tree (bisect:piece_generation, "
                                   "bisect:piece_level, bisect:piece_parents): nothing to coarsen");
@@ -139,14 +124,30 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
     if (a.origin)
       options.min_arrays.push_back(kOriginArray);
     const auto on_pass = coarsen_pass_printer(a.passes, quiet);
+    const Invariants whole_before = whole_invariants(d);
     const CoarsenResult result = coarsen(d, marks, options, on_pass);
 
-    // The final check across the new parts, against the input's volume and
-    // boundary measure (coarsen() checked the whole mesh on rank 0 too).
+    // The final check across the new parts: each part against itself as
+    // distributed, then the border between parts; and the whole mesh's
+    // volume and boundary measure against the input's.
     if (pvtu) {
-      // Each part against itself as distributed, then the border between parts.
       const Invariants part = measure_invariants(d.local, false);
-      const CheckResult check = check_refined(d, part, border_measure(d));
+      CheckResult check = check_refined(d, part, border_measure(d));
+      const Invariants whole_after = whole_invariants(d);
+      auto changed = [](double before, double after) {
+        return std::abs(after - before) > 1e-9 * std::max(std::abs(before), std::abs(after));
+      };
+      if (check.ok && (changed(whole_before.volume, whole_after.volume) ||
+                       changed(whole_before.boundary_measure, whole_after.boundary_measure))) {
+        check.ok = false;
+        char buf[200];
+        std::snprintf(buf, sizeof buf,
+                      "the whole mesh's volume or boundary measure changed: %.10g, %.10g -> "
+                      "%.10g, %.10g",
+                      whole_before.volume, whole_before.boundary_measure, whole_after.volume,
+                      whole_after.boundary_measure);
+        check.failure = buf;
+      }
       if (!check.ok) {
         if (rank == 0)
           std::cerr << "bisect: internal check failed after coarsening: " << one_line(check.failure)
@@ -181,6 +182,8 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
     if (bad)
       return kExitCheck;
     const double total = seconds_since(t_start);
+    double rss = peak_rss_bytes(), rss_max = 0;
+    MPI_Reduce(&rss, &rss_max, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
     if (rank == 0 && a.json) {
       nlohmann::json j;
       j["input"] = a.input;
@@ -196,6 +199,7 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
       j["removed_vertices"] = result.removed_vertices;
       j["merged_pairs"] = result.merged_pairs;
       j["seconds"] = total;
+      j["peak_rss_bytes_max_rank"] = rss_max;
       print_json(j);
     }
     if (!quiet)

@@ -135,18 +135,7 @@ int run_refine_mpi(const DistributedArgs &a) {
   // indicator must rank the input's cells together; any other input is
   // read, validated and marked by rank 0. A failure there ends every rank
   // with its exit code (only rank 0 prints it).
-  int parallel = 0;
-  if (rank == 0 && a.indicator.empty() && a.input.size() > 5) {
-    std::string ext = a.input.substr(a.input.size() - 5);
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    try {
-      parallel = ext == ".pvtu" && pvtu_has_global_ids(a.input);
-    } catch (const Error &) {
-      // (rank 0's read below says what is wrong)
-    }
-  }
-  MPI_Bcast(&parallel, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  const bool parallel = pieces_read_in_parallel(a.input, a.indicator.empty(), rank);
   Mesh mesh;
   Invariants original;
   std::unique_ptr<OutputSet> outputs;
@@ -209,21 +198,14 @@ int run_refine_mpi(const DistributedArgs &a) {
     std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
     DistributedMesh d;
     if (parallel) {
-      PartsReadOptions read_options;
-      read_options.progress = load_progress(a.input, quiet);
-      read_options.origin = a.origin;
-      d = read_pvtu_parts(a.input, MPI_COMM_WORLD, read_options);
-      // What rank 0 checks of a mesh it reads, on every rank alike.
-      dim = d.local.dim;
-      cells0 = d.global_cells;
-      verts0 = d.global_vertices;
-      original = whole_invariants(d);
-      if (!pvtu)
-        check_output_format(a.output, dim, a.format);
+      PartsFacts facts;
+      d = read_input_parts(a.input, a.origin, quiet, !pvtu, a.output, a.format, a.region, facts);
+      dim = facts.dim;
+      cells0 = facts.cells;
+      verts0 = facts.vertices;
+      original = facts.whole;
       if (!a.slices.empty() && dim < 3)
         throw UsageError("--slices needs a 3D (2D+t) or 4D mesh; " + a.input + " is 2D");
-      if (!a.region.empty())
-        (void)read_region(a.region, dim);
       if (a.marking && *a.marking != d.local.marking && !quiet)
         std::cerr << "bisect: " << a.input << " carries bisection state with --marking "
                   << marking_name(d.local.marking) << "; continuing it (--marking "
@@ -486,6 +468,40 @@ int run_refine_mpi(const DistributedArgs &a) {
   } catch (...) {
     return distributed_exit_code(rank);
   }
+}
+
+bool pieces_read_in_parallel(const std::string &input, bool allowed, int rank) {
+  int parallel = 0;
+  if (rank == 0 && allowed && input.size() > 5) {
+    std::string ext = input.substr(input.size() - 5);
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    try {
+      parallel = ext == ".pvtu" && pvtu_has_global_ids(input);
+    } catch (const Error &) {
+      // (rank 0's own read says what is wrong)
+    }
+  }
+  MPI_Bcast(&parallel, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  return parallel != 0;
+}
+
+DistributedMesh read_input_parts(const std::string &input, bool origin, bool quiet, bool gathered,
+                                 const std::string &output, const std::string &format,
+                                 const std::string &region, PartsFacts &facts) {
+  PartsReadOptions read_options;
+  read_options.progress = load_progress(input, quiet);
+  read_options.origin = origin;
+  DistributedMesh d = read_pvtu_parts(input, MPI_COMM_WORLD, read_options);
+  facts.dim = d.local.dim;
+  facts.cells = d.global_cells;
+  facts.vertices = d.global_vertices;
+  facts.whole = whole_invariants(d);
+  if (gathered)
+    check_output_format(output, facts.dim, format);
+  if (!region.empty())
+    (void)read_region(region, facts.dim);
+  return d;
 }
 
 int on_rank_zero(int rank, const std::function<void()> &step) {

@@ -4,6 +4,8 @@
 #include "bisect/io.hpp"
 #include "bisect/mesh.hpp"
 
+#include "bisect/distributed.hpp"
+
 #include <functional>
 #include <optional>
 #include <string>
@@ -58,6 +60,23 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &args);
 // and said once by rank 0; anything else is one rank's internal error,
 // said by that rank, and the job is aborted.
 int distributed_exit_code(int rank);
+// Whether every rank reads the input's pieces (read_pvtu_parts of
+// distributed.hpp): a .pvtu that bisect wrote (it declares bisect:global_id),
+// when `allowed`. Rank 0 looks; every rank gets the answer. Collective.
+bool pieces_read_in_parallel(const std::string &input, bool allowed, int rank);
+// What rank 0 learns of an input it reads, found from the parts instead.
+struct PartsFacts {
+  int dim = 0;
+  std::size_t cells = 0, vertices = 0;
+  Invariants whole; // volume and boundary measure (no Euler characteristic)
+};
+// The parts from the pieces of `input`, with the checks rank 0 makes of an
+// input it reads, on every rank alike: a 4D mesh for a gathered .msh
+// `output` (when `gathered`), the region spec against the dimension.
+// Collective; throws on every rank.
+DistributedMesh read_input_parts(const std::string &input, bool origin, bool quiet, bool gathered,
+                                 const std::string &output, const std::string &format,
+                                 const std::string &region, PartsFacts &facts);
 // Runs `step` on rank 0 (reading and checking the input); its failure (an
 // input or check error, or memory) ends every rank: returns the exit code
 // on every rank (0: go on), and rank 0 says why in one line. Collective.
