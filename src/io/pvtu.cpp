@@ -6,6 +6,7 @@
 // same bits in every piece that holds the point).
 #include "bisect/io.hpp"
 #include "bisect/state.hpp"
+#include "core/arrays.hpp"
 #include "core/faces.hpp"
 #include "core/heights.hpp"
 #include "core/reorder.hpp"
@@ -173,16 +174,6 @@ void tree_from_pieces(Mesh &out, std::size_t fixed, const std::string &path) {
   out.point_data.push_back(std::move(pa));
   out.point_data.push_back(std::move(pb));
   out.point_data.push_back(std::move(lv));
-}
-
-// The arrays of `a` and `b` by name, components and type, for a message.
-bool same_arrays(const std::vector<DataArray> &a, const std::vector<DataArray> &b) {
-  if (a.size() != b.size())
-    return false;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (a[i].name != b[i].name || a[i].components != b[i].components || a[i].type != b[i].type)
-      return false;
-  return true;
 }
 
 } // namespace

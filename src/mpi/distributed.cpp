@@ -14,6 +14,7 @@
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
 #include "bisect/state.hpp"
+#include "core/arrays.hpp"
 #include "core/faces.hpp"
 #include "core/heights.hpp"
 #include "core/reorder.hpp"
@@ -292,6 +293,17 @@ std::vector<int> hilbert_parts(const Mesh &m, int parts) {
 
 // ---------------------------------------------------------------- helpers
 
+// A mesh with no part yet, on a duplicate of `comm`.
+DistributedMesh on_communicator(MPI_Comm comm) {
+  DistributedMesh d;
+  MPI_Comm dup;
+  MPI_Comm_dup(comm, &dup);
+  d.comm = Communicator(dup);
+  MPI_Comm_rank(dup, &d.rank);
+  MPI_Comm_size(dup, &d.size);
+  return d;
+}
+
 // The rank at which a point's coordinates are known (a hash of its bits).
 int home_rank(const double *p, int dim, int size) {
   std::uint64_t h = 0x243F6A8885A308D3ull;
@@ -405,12 +417,8 @@ std::size_t sum_ranks(std::size_t mine, MPI_Comm comm) {
 // ---------------------------------------------------------------- distribute
 
 DistributedMesh distribute(const Mesh &mesh, int root, MPI_Comm comm) {
-  DistributedMesh d;
-  MPI_Comm dup;
-  MPI_Comm_dup(comm, &dup);
-  d.comm = Communicator(dup);
-  MPI_Comm_rank(dup, &d.rank);
-  MPI_Comm_size(dup, &d.size);
+  DistributedMesh d = on_communicator(comm);
+  MPI_Comm dup = d.comm.get();
 
   // Rank 0 says whether the mesh can be split before anyone waits for a part.
   std::string refusal;
@@ -1801,15 +1809,6 @@ std::optional<DataArray> take_array(std::vector<DataArray> &arrays, const char *
   return std::nullopt;
 }
 
-bool same_layout(const std::vector<DataArray> &a, const std::vector<DataArray> &b) {
-  if (a.size() != b.size())
-    return false;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (a[i].name != b[i].name || a[i].components != b[i].components || a[i].type != b[i].type)
-      return false;
-  return true;
-}
-
 std::vector<DataArray> empty_like(const std::vector<DataArray> &arrays) {
   std::vector<DataArray> out;
   for (const DataArray &a : arrays)
@@ -1880,7 +1879,7 @@ void load_pieces(DistributedMesh &d, PiecePart &pp, const std::string &path,
       pp.first_piece = source;
       index.emplace(m.coords, dim);
     } else if (p.dim != m.dim || p.marking != m.marking || tree != pp.tree ||
-               !same_layout(p.point_data, m.point_data) || !same_layout(p.cell_data, m.cell_data)) {
+               !same_arrays(p.point_data, m.point_data) || !same_arrays(p.cell_data, m.cell_data)) {
       refuse("its dimension, marking, tree or point and cell arrays differ from piece " +
              pp.first_piece + "'s");
     }
@@ -1954,7 +1953,7 @@ void load_pieces(DistributedMesh &d, PiecePart &pp, const std::string &path,
         m.entities.back().dim = e.dim;
         m.entities.back().data = empty_like(e.data);
         kept.emplace_back();
-      } else if (!same_layout(e.data, m.entities[b].data)) {
+      } else if (!same_arrays(e.data, m.entities[b].data)) {
         refuse("its cells of dimension " + std::to_string(e.dim) +
                " have other arrays than an earlier piece's");
       }
@@ -2052,7 +2051,7 @@ void agree_layout(DistributedMesh &d, PiecePart &pp, bool loaded, const std::str
   std::string failure;
   if (loaded &&
       (m.dim != model->dim || m.marking != model->marking || pp.tree != model->tree ||
-       !same_layout(m.point_data, model->point) || !same_layout(m.cell_data, model->cell)))
+       !same_arrays(m.point_data, model->point) || !same_arrays(m.cell_data, model->cell)))
     failure = path + ": piece " + pp.first_piece +
               ": its dimension, marking, tree or point and cell arrays differ from piece " +
               model->piece + "'s";
@@ -2062,7 +2061,7 @@ void agree_layout(DistributedMesh &d, PiecePart &pp, bool loaded, const std::str
     for (const Entities &e : l.blocks)
       blocks.emplace(e.dim, &e);
   for (const Entities &e : m.entities)
-    if (failure.empty() && !same_layout(e.data, blocks.at(e.dim)->data))
+    if (failure.empty() && !same_arrays(e.data, blocks.at(e.dim)->data))
       failure = "piece " + pp.first_piece + ": its cells of dimension " + std::to_string(e.dim) +
                 " have other arrays than another piece's";
   throw_first(failure, ErrorKind::Input, d);
@@ -2304,12 +2303,8 @@ bool pvtu_has_global_ids(const std::string &path) {
 
 DistributedMesh read_pvtu_parts(const std::string &path, MPI_Comm comm,
                                 const PartsReadOptions &options) {
-  DistributedMesh d;
-  MPI_Comm dup;
-  MPI_Comm_dup(comm, &dup);
-  d.comm = Communicator(dup);
-  MPI_Comm_rank(dup, &d.rank);
-  MPI_Comm_size(dup, &d.size);
+  DistributedMesh d = on_communicator(comm);
+  MPI_Comm dup = d.comm.get();
   std::string failure;
   ErrorKind kind = ErrorKind::Input;
   PiecePart pp;

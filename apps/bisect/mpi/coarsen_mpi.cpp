@@ -83,15 +83,13 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
   MPI_Bcast(&dim, 1, MPI_INT, 0, MPI_COMM_WORLD);
 
   try {
-    std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
-    DistributedMesh d;
+    PartsFacts in{dim, mesh.num_cells(), mesh.num_vertices(), original};
+    DistributedMesh d = input_parts(parallel, mesh, a.input, a.origin, quiet, !pvtu, a.output,
+                                    a.format, a.region, in);
+    const std::size_t cells0 = in.cells, verts0 = in.vertices;
+    dim = in.dim;
+    original = in.whole;
     if (parallel) {
-      PartsFacts facts;
-      d = read_input_parts(a.input, a.origin, quiet, !pvtu, a.output, a.format, a.region, facts);
-      dim = facts.dim;
-      cells0 = facts.cells;
-      verts0 = facts.vertices;
-      original = facts.whole;
       if (!any_rank_has_tree(d))
         throw InputError(a.input, "carries no bisection tree (bisect:piece_generation, "
                                   "bisect:piece_level, bisect:piece_parents): nothing to coarsen");
@@ -101,8 +99,6 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
                   << (d.size == 1 ? std::string("one rank")
                                   : "all " + std::to_string(d.size) + " ranks")
                   << "\n";
-    } else {
-      d = distribute(mesh, 0, MPI_COMM_WORLD);
     }
     mesh = Mesh{};
     // Each rank marks its cells as the serial coarsen marks them (a cell's

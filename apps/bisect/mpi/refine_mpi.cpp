@@ -195,23 +195,19 @@ int run_refine_mpi(const DistributedArgs &a) {
   MPI_Bcast(&dim, 1, MPI_INT, 0, MPI_COMM_WORLD);
 
   try {
-    std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
-    DistributedMesh d;
+    PartsFacts in{dim, mesh.num_cells(), mesh.num_vertices(), original};
+    DistributedMesh d = input_parts(parallel, mesh, a.input, a.origin, quiet, !pvtu, a.output,
+                                    a.format, a.region, in);
+    const std::size_t cells0 = in.cells, verts0 = in.vertices;
+    dim = in.dim;
+    original = in.whole;
     if (parallel) {
-      PartsFacts facts;
-      d = read_input_parts(a.input, a.origin, quiet, !pvtu, a.output, a.format, a.region, facts);
-      dim = facts.dim;
-      cells0 = facts.cells;
-      verts0 = facts.vertices;
-      original = facts.whole;
       if (!a.slices.empty() && dim < 3)
         throw UsageError("--slices needs a 3D (2D+t) or 4D mesh; " + a.input + " is 2D");
       if (a.marking && *a.marking != d.local.marking && !quiet)
         std::cerr << "bisect: " << a.input << " carries bisection state with --marking "
                   << marking_name(d.local.marking) << "; continuing it (--marking "
                   << marking_name(*a.marking) << " ignored)\n";
-    } else {
-      d = distribute(mesh, 0, MPI_COMM_WORLD);
     }
     mesh = Mesh{};
     Invariants part_original = measure_invariants(d.local, false);
@@ -486,9 +482,12 @@ bool pieces_read_in_parallel(const std::string &input, bool allowed, int rank) {
   return parallel != 0;
 }
 
-DistributedMesh read_input_parts(const std::string &input, bool origin, bool quiet, bool gathered,
-                                 const std::string &output, const std::string &format,
-                                 const std::string &region, PartsFacts &facts) {
+DistributedMesh input_parts(bool parallel, const Mesh &mesh, const std::string &input, bool origin,
+                            bool quiet, bool gathered, const std::string &output,
+                            const std::string &format, const std::string &region,
+                            PartsFacts &facts) {
+  if (!parallel)
+    return distribute(mesh, 0, MPI_COMM_WORLD);
   PartsReadOptions read_options;
   read_options.progress = load_progress(input, quiet);
   read_options.origin = origin;

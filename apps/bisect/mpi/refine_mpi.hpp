@@ -70,13 +70,16 @@ struct PartsFacts {
   std::size_t cells = 0, vertices = 0;
   Invariants whole; // volume and boundary measure (no Euler characteristic)
 };
-// The parts from the pieces of `input`, with the checks rank 0 makes of an
-// input it reads, on every rank alike: a 4D mesh for a gathered .msh
-// `output` (when `gathered`), the region spec against the dimension.
-// Collective; throws on every rank.
-DistributedMesh read_input_parts(const std::string &input, bool origin, bool quiet, bool gathered,
-                                 const std::string &output, const std::string &format,
-                                 const std::string &region, PartsFacts &facts);
+// The parts: from the pieces of `input` when `parallel`, with the checks
+// rank 0 makes of an input it reads, on every rank alike (a 4D mesh for a
+// gathered .msh `output`, when `gathered`; the region spec against the
+// dimension), and `facts` found from them; else distribute(mesh) of what
+// rank 0 read (`facts` as the caller set them). Collective; throws on every
+// rank.
+DistributedMesh input_parts(bool parallel, const Mesh &mesh, const std::string &input, bool origin,
+                            bool quiet, bool gathered, const std::string &output,
+                            const std::string &format, const std::string &region,
+                            PartsFacts &facts);
 // Runs `step` on rank 0 (reading and checking the input); its failure (an
 // input or check error, or memory) ends every rank: returns the exit code
 // on every rank (0: go on), and rank 0 says why in one line. Collective.
