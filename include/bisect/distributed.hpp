@@ -96,9 +96,9 @@ bool pvtu_has_global_ids(const std::string &path);
 // with K pieces, rank r loads pieces [rK/P, (r+1)K/P), each validated as an
 // input file (load_mesh), merges them by coordinates, and the cells then
 // migrate to equal stretches of the Hilbert curve, as rebalance() moves them;
-// no rank holds more than its pieces and its new part. Where parts meet,
-// each rank validates its part together with the cells of other parts that
-// share a vertex with it (prepare_input and the state's consistency: a facet
+// no rank holds more than its pieces and its new part. Where pieces meet,
+// the stars of the vertices with cells of two pieces around them are
+// validated together (prepare_input and the state's consistency: a facet
 // in three cells, a hanging node or a state that disagrees across a facet
 // between pieces is refused like one within a piece). The pieces must carry
 // bisect:global_id (dense: the ids 0..N-1 once each) and the bisection

@@ -1821,6 +1821,7 @@ std::vector<DataArray> empty_like(const std::vector<DataArray> &arrays) {
 // its level and parents by coordinates (its own point twice: an original).
 struct PiecePart {
   std::vector<double> gid, level, parents, generation;
+  std::vector<double> piece; // per cell: its piece's index
   bool tree = false;
   std::string first_piece; // for messages
 };
@@ -1942,6 +1943,7 @@ void load_pieces(DistributedMesh &d, PiecePart &pp, const std::string &path,
     for (std::size_t a = 0; a < p.cell_data.size(); ++a)
       m.cell_data[a].values.insert(m.cell_data[a].values.end(), p.cell_data[a].values.begin(),
                                    p.cell_data[a].values.end());
+    pp.piece.insert(pp.piece.end(), p.num_cells(), double(i));
     // Tagged entities: a block per dimension; one on the border of two
     // pieces is kept once.
     for (const Entities &e : p.entities) {
@@ -2225,12 +2227,19 @@ void check_piece_tree(const DistributedMesh &d, const std::string &path) {
   throw_first(failure, ErrorKind::Input, d);
 }
 
-// Validates each part with the cells of other parts that share a vertex
-// with it, as an input file is validated (prepare_input, then the state's
-// consistency): every facet, face and star that touches the part is whole
-// there, so what the pieces' own validation could not see where they met is
-// seen by some rank. Throws InputError naming `path` on every rank.
-void validate_where_parts_meet(const DistributedMesh &d, const std::string &path) {
+// Validates where the pieces meet, as an input file is validated
+// (prepare_input, then the state's consistency): each piece was validated
+// alone, so what is left is what involves cells of two pieces. Every cell
+// carries its piece (the array `piece`); the cells of other parts that share
+// a vertex with this part come over, so every vertex of the part has its
+// whole star here; the vertices whose star holds cells of two pieces are
+// the pieces' border, and their stars (every facet, face and star that two
+// pieces share is in one) are validated together. A facet in three cells, a
+// hanging node or a state that disagrees across a facet where pieces meet is
+// refused as within one piece. Throws InputError naming `path` on every
+// rank.
+void validate_where_pieces_meet(const DistributedMesh &d, const std::vector<double> &piece,
+                                const std::string &path) {
   const Mesh &m = d.local;
   const int n = m.cell_size(), dim = m.dim;
   const std::vector<std::size_t> slot_of = neighbour_slots(d);
@@ -2249,6 +2258,7 @@ void validate_where_parts_meet(const DistributedMesh &d, const std::string &path
       std::vector<double> &o = out[slot_of[std::size_t(r)]];
       o.push_back(double(std::uint8_t(m.stage[c])));
       o.push_back(double(m.tag[c]));
+      o.push_back(piece[c]);
       for (int i = 0; i < n; ++i)
         o.insert(o.end(), m.point(m.cell(CellId(c))[i]), m.point(m.cell(CellId(c))[i]) + dim);
     }
@@ -2257,40 +2267,75 @@ void validate_where_parts_meet(const DistributedMesh &d, const std::string &path
   out.clear();
   std::string failure;
   ErrorKind kind = ErrorKind::Input;
+  std::size_t checked = 0;
   keep_failure(failure, kind, [&] {
-    Mesh ext;
-    ext.dim = dim;
-    ext.marking = m.marking;
-    ext.coords = m.coords;
-    ext.cells = m.cells;
-    ext.stage = m.stage;
-    ext.tag = m.tag;
-    PointIndex index(ext.coords, dim);
+    // The part and the cells around it: ids, state and piece per cell.
+    std::vector<double> coords = m.coords;
+    std::vector<VertexId> cells = m.cells;
+    std::vector<Stage> stage = m.stage;
+    std::vector<std::uint8_t> tag = m.tag;
+    std::vector<double> from = piece;
+    PointIndex index(coords, dim);
     for (std::size_t v = 0; v < m.num_vertices(); ++v)
       index.add(VertexId(v));
-    const std::size_t record = 2 + std::size_t(n * dim);
-    for (const std::vector<double> &cells : in)
-      for (std::size_t at = 0; at + record <= cells.size(); at += record) {
-        ext.stage.push_back(Stage(std::uint8_t(cells[at])));
-        ext.tag.push_back(std::uint8_t(cells[at + 1]));
+    const std::size_t record = 3 + std::size_t(n * dim);
+    for (const std::vector<double> &got : in)
+      for (std::size_t at = 0; at + record <= got.size(); at += record) {
+        stage.push_back(Stage(std::uint8_t(got[at])));
+        tag.push_back(std::uint8_t(got[at + 1]));
+        from.push_back(got[at + 2]);
         for (int i = 0; i < n; ++i) {
-          const double *p = cells.data() + at + 2 + std::size_t(i * dim);
+          const double *p = got.data() + at + 3 + std::size_t(i * dim);
           VertexId v = index.find(p);
           if (v == kNoVertex) {
-            v = VertexId(ext.num_vertices());
-            ext.coords.insert(ext.coords.end(), p, p + dim);
+            v = VertexId(coords.size() / std::size_t(dim));
+            coords.insert(coords.end(), p, p + dim);
             index.add(v);
           }
-          ext.cells.push_back(v);
+          cells.push_back(v);
         }
       }
-    encode_state(ext);
-    prepare_input(ext, path);
-    decode_state(ext, path);
+    // The border of the pieces among the part's vertices.
+    const std::size_t nv = coords.size() / std::size_t(dim), nc = from.size();
+    std::vector<double> lo(nv, std::numeric_limits<double>::infinity()),
+        hi(nv, -std::numeric_limits<double>::infinity());
+    for (std::size_t c = 0; c < nc; ++c)
+      for (int i = 0; i < n; ++i) {
+        const VertexId v = cells[c * std::size_t(n) + std::size_t(i)];
+        lo[v] = std::min(lo[v], from[c]);
+        hi[v] = std::max(hi[v], from[c]);
+      }
+    auto border = [&](VertexId v) { return v < m.num_vertices() && lo[v] != hi[v]; };
+    // Their stars, as one mesh.
+    Mesh b;
+    b.dim = dim;
+    b.marking = m.marking;
+    std::vector<VertexId> id(nv, kNoVertex);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const VertexId *x = cells.data() + c * std::size_t(n);
+      if (std::none_of(x, x + n, border))
+        continue;
+      for (int i = 0; i < n; ++i) {
+        if (id[x[i]] == kNoVertex) {
+          id[x[i]] = VertexId(b.num_vertices());
+          b.coords.insert(b.coords.end(), coords.begin() + std::ptrdiff_t(x[i] * std::size_t(dim)),
+                          coords.begin() + std::ptrdiff_t((x[i] + 1) * std::size_t(dim)));
+        }
+        b.cells.push_back(id[x[i]]);
+      }
+      b.stage.push_back(stage[c]);
+      b.tag.push_back(tag[c]);
+    }
+    checked = b.num_cells();
+    if (checked == 0)
+      return;
+    encode_state(b);
+    prepare_input(b, path);
+    decode_state(b, path);
   });
   if (!failure.empty())
-    failure += " (where the pieces meet, in rank " + std::to_string(d.rank) +
-               "'s part with the cells around it)";
+    failure += " (where the pieces meet: in rank " + std::to_string(d.rank) + "'s " +
+               std::to_string(checked) + " cells around them)";
   throw_first(failure, kind, d);
 }
 
@@ -2321,6 +2366,9 @@ DistributedMesh read_pvtu_parts(const std::string &path, MPI_Comm comm,
   keep_failure(failure, kind, [&] { order_part(d, pp, path); });
   throw_first(failure, kind, d);
   const bool tree = pp.tree;
+  // Each cell's piece travels with it, for the validation where pieces meet.
+  constexpr const char *kPieceArray = "bisect:read_piece";
+  d.local.cell_data.push_back({kPieceArray, 1, std::move(pp.piece), ValueType::Int32});
   pp = {};
   Mesh &m = d.local;
   if (tree)
@@ -2360,7 +2408,8 @@ DistributedMesh read_pvtu_parts(const std::string &path, MPI_Comm comm,
     throw InputError(path, std::string("the pieces' ") + kGlobalIdArray + " are not the ids 0.." +
                                std::to_string(top ? top - 1 : 0) + " once each (their points: " +
                                std::to_string(figures[0]) + "); read the .pvtu without mpirun");
-  validate_where_parts_meet(d, path);
+  std::optional<DataArray> pieces = take_array(m.cell_data, kPieceArray);
+  validate_where_pieces_meet(d, pieces->values, path);
   return d;
 }
 
