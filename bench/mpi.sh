@@ -72,6 +72,7 @@ import json, sys
 j = json.load(open("c.json"))
 print(f"  P={sys.argv[1]}{sys.argv[2]}, from out.pvtu (pieces read in parallel: {j['pieces_read_in_parallel']}): "
       f"{j['cells']:,} pentatopes left in {j['seconds']:.2f} s, "
+      f"{j['rounds']} rounds moving {j['moved_cells']:,} cells between parts, "
       f"peak RSS of the largest rank {j['peak_rss_bytes_max_rank'] / 2**20:.0f} MiB")
 PY
 done

@@ -30,6 +30,10 @@ struct CoarsenPass {
   std::size_t removed_vertices = 0;    // by this pass
   std::size_t merged_pairs = 0;        // by this pass (cells removed)
   std::size_t cells = 0, vertices = 0; // after it
+  // Distributed coarsen (distributed.hpp) only: the rounds in which cells
+  // moved between parts, and how many moved in all.
+  int rounds = 0;
+  std::size_t moved_cells = 0;
 };
 
 struct CoarsenResult {

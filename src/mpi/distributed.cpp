@@ -2667,6 +2667,8 @@ CoarsenResult coarsen(DistributedMesh &d, const std::vector<char> &marks_in,
         eligible[v] = level(v) > 0 && level(v) >= around[v];
     }
     std::uint64_t figures[2] = {0, 0}; // removed vertices, merged pairs
+    int rounds = 0;
+    std::uint64_t moved = 0;
     // Rounds: each part runs the pass among the vertices no other part
     // holds; then the cells around each vertex still waiting on a border
     // (eligible, shared, its cells here all marked and made by bisection)
@@ -2691,16 +2693,20 @@ CoarsenResult coarsen(DistributedMesh &d, const std::vector<char> &marks_in,
             ready[m.cell(CellId(c))[i]] = 0;
       std::vector<int> dest(m.num_cells(), d.rank);
       bool moving = false;
+      std::size_t leaving = 0;
       for (std::size_t c = 0; c < m.num_cells(); ++c)
         for (int i = 0; i < n; ++i) {
           const VertexId x = m.cell(CellId(c))[i];
           if (eligible[x] && ready[x] && !d.sharers[x].empty() && d.sharers[x].front() < dest[c]) {
+            leaving += dest[c] == d.rank;
             dest[c] = d.sharers[x].front();
             moving = true;
           }
         }
       if (!any_rank(moving, comm))
         break;
+      ++rounds;
+      moved += leaving;
       move_cells(dest);
     }
     MPI_Allreduce(MPI_IN_PLACE, figures, 2, MPI_UINT64_T, MPI_SUM, comm);
@@ -2711,6 +2717,9 @@ CoarsenResult coarsen(DistributedMesh &d, const std::vector<char> &marks_in,
     pass.merged_pairs = figures[1];
     pass.cells = d.global_cells;
     pass.vertices = d.global_vertices;
+    pass.rounds = rounds;
+    MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_UINT64_T, MPI_SUM, comm);
+    pass.moved_cells = moved;
     if (on_pass && d.rank == 0)
       on_pass(pass);
     if (pass.removed_vertices == 0)

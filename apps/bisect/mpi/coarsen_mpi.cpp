@@ -119,7 +119,15 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
     options.sum_arrays = a.sums;
     if (a.origin)
       options.min_arrays.push_back(kOriginArray);
-    const auto on_pass = coarsen_pass_printer(a.passes, quiet);
+    const auto print_pass = coarsen_pass_printer(a.passes, quiet);
+    int rounds = 0;
+    std::size_t moved = 0;
+    const auto on_pass = [&](const CoarsenPass &pass) {
+      rounds += pass.rounds;
+      moved += pass.moved_cells;
+      if (print_pass)
+        print_pass(pass);
+    };
     const Invariants whole_before = whole_invariants(d);
     const CoarsenResult result = coarsen(d, marks, options, on_pass);
 
@@ -196,6 +204,8 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
       j["merged_pairs"] = result.merged_pairs;
       j["seconds"] = total;
       j["peak_rss_bytes_max_rank"] = rss_max;
+      j["rounds"] = rounds;     // in which cells moved between parts
+      j["moved_cells"] = moved; // in those rounds, over all passes
       print_json(j);
     }
     if (!quiet)
