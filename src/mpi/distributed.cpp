@@ -2691,19 +2691,49 @@ CoarsenResult coarsen(DistributedMesh &d, const std::vector<char> &marks_in,
         if (!marks[c] || m.generation[c] == 0)
           for (int i = 0; i < n; ++i)
             ready[m.cell(CellId(c))[i]] = 0;
-      std::vector<int> dest(m.num_cells(), d.rank);
-      bool moving = false;
+      // Where cells go: around each waiting vertex, to the lowest rank
+      // holding it; and on through the waiting vertices of those cells, so
+      // that a chain of vertices waiting for each other moves in one round
+      // (each vertex labelled with the lowest rank that reaches it).
+      std::vector<int> dest(m.num_cells(), d.rank), owner(m.num_vertices(), d.rank);
+      std::vector<VertexId> work;
+      auto waiting = [&](VertexId x) { return eligible[x] && ready[x]; };
+      for (std::size_t v = 0; v < m.num_vertices(); ++v)
+        if (waiting(VertexId(v)) && !d.sharers[v].empty() && d.sharers[v].front() < d.rank) {
+          owner[v] = d.sharers[v].front();
+          work.push_back(VertexId(v));
+        }
       std::size_t leaving = 0;
-      for (std::size_t c = 0; c < m.num_cells(); ++c)
-        for (int i = 0; i < n; ++i) {
-          const VertexId x = m.cell(CellId(c))[i];
-          if (eligible[x] && ready[x] && !d.sharers[x].empty() && d.sharers[x].front() < dest[c]) {
+      if (!work.empty()) {
+        std::vector<std::uint32_t> start(m.num_vertices() + 1, 0);
+        for (VertexId x : m.cells)
+          ++start[x + 1];
+        std::partial_sum(start.begin(), start.end(), start.begin());
+        std::vector<CellId> around(start.back());
+        std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+        for (std::size_t c = 0; c < m.num_cells(); ++c)
+          for (int i = 0; i < n; ++i)
+            around[fill[m.cell(CellId(c))[i]]++] = CellId(c);
+        while (!work.empty()) {
+          const VertexId v = work.back();
+          work.pop_back();
+          for (std::uint32_t k = start[v]; k < start[v + 1]; ++k) {
+            const CellId c = around[k];
+            if (owner[v] >= dest[c])
+              continue;
             leaving += dest[c] == d.rank;
-            dest[c] = d.sharers[x].front();
-            moving = true;
+            dest[c] = owner[v];
+            for (int i = 0; i < n; ++i) {
+              const VertexId y = m.cell(c)[i];
+              if (waiting(y) && owner[v] < owner[y]) {
+                owner[y] = owner[v];
+                work.push_back(y);
+              }
+            }
           }
         }
-      if (!any_rank(moving, comm))
+      }
+      if (!any_rank(leaving > 0, comm))
         break;
       ++rounds;
       moved += leaving;
