@@ -69,7 +69,9 @@ struct DistributedMesh {
   // parents, and these name them, for the tree of a .pvtu's pieces
   // (write_pvtu) and for gather().
   std::vector<double> parent_points;
-  // On the root, when the input had a tree: its parent_edge and level.
+  // On the root, when distribute() was given a mesh with a tree: its
+  // parent_edge and level (empty after read_pvtu_parts or coarsen(): gather()
+  // then takes the input vertices' tree from the parts).
   std::vector<VertexId> input_parent_edge;
   std::vector<std::uint16_t> input_level;
   std::size_t global_cells = 0, global_vertices = 0;

@@ -55,6 +55,13 @@ std::vector<std::string> piece_sources(const std::string &path) {
     sources.push_back(source.is_absolute()
                           ? source.string()
                           : (fs::path(path).parent_path() / source).lexically_normal().string());
+    // Pieces are .vtu files, checked as inputs are when read (a regular,
+    // readable, non-empty file: never a device, a FIFO or another .pvtu).
+    std::string ext = source.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext != ".vtu")
+      throw InputError(path, "piece " + sources.back() + " is not a .vtu file");
   }
   if (sources.empty())
     throw InputError(path, "no <Piece Source=...> in the file");
@@ -200,13 +207,6 @@ Mesh read_pvtu(const std::string &path) {
   const std::vector<std::string> sources = piece_sources(path);
   std::vector<Mesh> pieces;
   for (const std::string &source : sources) {
-    // Pieces are .vtu files, checked as inputs are (a regular, readable,
-    // non-empty file: never a device, a FIFO or another .pvtu).
-    std::string ext = fs::path(source).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext != ".vtu")
-      throw InputError(path, "piece " + source + " is not a .vtu file");
     try {
       pieces.push_back(read_mesh(source));
     } catch (const InputError &e) {

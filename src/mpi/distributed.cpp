@@ -317,6 +317,31 @@ int home_rank(const double *p, int dim, int size) {
   return int(h % static_cast<std::uint64_t>(size));
 }
 
+// send[r] to rank r, for every r, as MPI type `type`; returns what each rank
+// sent here. Collective.
+template <class T>
+std::vector<std::vector<T>> all_to_all(const std::vector<std::vector<T>> &send, MPI_Comm comm,
+                                       MPI_Datatype type = MPI_DOUBLE) {
+  const std::size_t np = send.size();
+  std::vector<int> sc(np), rc(np), sd(np + 1, 0), rd(np + 1, 0);
+  for (std::size_t r = 0; r < np; ++r)
+    sc[r] = int(send[r].size());
+  MPI_Alltoall(sc.data(), 1, MPI_INT, rc.data(), 1, MPI_INT, comm);
+  std::vector<T> flat;
+  for (std::size_t r = 0; r < np; ++r) {
+    sd[r + 1] = sd[r] + sc[r];
+    rd[r + 1] = rd[r] + rc[r];
+    flat.insert(flat.end(), send[r].begin(), send[r].end());
+  }
+  std::vector<T> got(std::size_t(std::max(rd[np], 1)));
+  MPI_Alltoallv(flat.data(), sc.data(), sd.data(), type, got.data(), rc.data(), rd.data(), type,
+                comm);
+  std::vector<std::vector<T>> out(np);
+  for (std::size_t r = 0; r < np; ++r)
+    out[r].assign(got.begin() + rd[r], got.begin() + rd[r + 1]);
+  return out;
+}
+
 std::vector<int> intersect(const std::vector<int> &a, const std::vector<int> &b) {
   std::vector<int> out;
   std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out));
@@ -1680,28 +1705,7 @@ void migrate(DistributedMesh &d, const std::vector<int> &dest, int with_tree = -
                                nm.point(VertexId(v)) + dim);
     asked[std::size_t(h)].push_back(VertexId(v));
   }
-  auto exchange = [&](const auto &send, auto &receive, MPI_Datatype type) {
-    using T = typename std::decay_t<decltype(send[0])>::value_type;
-    std::vector<int> sc(np), rc(np), sd(np + 1, 0), rd(np + 1, 0);
-    for (int r = 0; r < P; ++r)
-      sc[std::size_t(r)] = int(send[std::size_t(r)].size());
-    MPI_Alltoall(sc.data(), 1, MPI_INT, rc.data(), 1, MPI_INT, comm);
-    std::vector<T> flat;
-    for (int r = 0; r < P; ++r) {
-      sd[std::size_t(r) + 1] = sd[std::size_t(r)] + sc[std::size_t(r)];
-      rd[std::size_t(r) + 1] = rd[std::size_t(r)] + rc[std::size_t(r)];
-      flat.insert(flat.end(), send[std::size_t(r)].begin(), send[std::size_t(r)].end());
-    }
-    std::vector<T> got(std::size_t(rd[np]));
-    MPI_Alltoallv(flat.data(), sc.data(), sd.data(), type, got.data(), rc.data(), rd.data(), type,
-                  comm);
-    receive.assign(std::size_t(P), {});
-    for (int r = 0; r < P; ++r)
-      receive[std::size_t(r)].assign(got.begin() + rd[std::size_t(r)],
-                                     got.begin() + rd[std::size_t(r) + 1]);
-  };
-  std::vector<std::vector<double>> heard;
-  exchange(ask, heard, MPI_DOUBLE);
+  std::vector<std::vector<double>> heard = all_to_all(ask, comm);
   // At home: every point heard, with the ranks that hold it.
   std::map<std::vector<double>, std::vector<int>> holders;
   for (int r = 0; r < P; ++r)
@@ -1723,8 +1727,7 @@ void migrate(DistributedMesh &d, const std::vector<int> &dest, int with_tree = -
     }
   heard.clear();
   holders.clear();
-  std::vector<std::vector<int>> answers;
-  exchange(reply, answers, MPI_INT);
+  const std::vector<std::vector<int>> answers = all_to_all(reply, comm, MPI_INT);
   d.sharers.assign(nm.num_vertices(), {});
   for (int h = 0; h < P; ++h) {
     std::size_t at = 0;
@@ -1836,11 +1839,6 @@ void load_pieces(DistributedMesh &d, PiecePart &pp, const std::string &path,
   std::vector<std::unordered_set<FaceKey, FaceKeyHash>> kept; // per block: entities taken
   for (std::size_t i = first; i < last; ++i) {
     const std::string &source = sources[i];
-    std::string ext = std::filesystem::path(source).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char ch) { return char(std::tolower(ch)); });
-    if (ext != ".vtu")
-      throw InputError(path, "piece " + source + " is not a .vtu file");
     Mesh p;
     try {
       p = load_mesh(source, i == first ? progress : LoadProgress{});
@@ -2064,8 +2062,8 @@ void agree_layout(DistributedMesh &d, PiecePart &pp, bool loaded, const std::str
       blocks.emplace(e.dim, &e);
   for (const Entities &e : m.entities)
     if (failure.empty() && !same_arrays(e.data, blocks.at(e.dim)->data))
-      failure = "piece " + pp.first_piece + ": its cells of dimension " + std::to_string(e.dim) +
-                " have other arrays than another piece's";
+      failure = path + ": piece " + pp.first_piece + ": its cells of dimension " +
+                std::to_string(e.dim) + " have other arrays than another piece's";
   throw_first(failure, ErrorKind::Input, d);
   if (!loaded) {
     m.dim = model->dim;
@@ -2124,29 +2122,6 @@ void order_part(DistributedMesh &d, PiecePart &pp, const std::string &path) {
     }
     m.parent_edge.assign(2 * nv, kNoVertex);
   }
-}
-
-// send[r] to rank r, for every r; returns what each rank sent here.
-std::vector<std::vector<double>> all_to_all(const std::vector<std::vector<double>> &send,
-                                            MPI_Comm comm) {
-  const std::size_t np = send.size();
-  std::vector<int> sc(np), rc(np), sd(np + 1, 0), rd(np + 1, 0);
-  for (std::size_t r = 0; r < np; ++r)
-    sc[r] = int(send[r].size());
-  MPI_Alltoall(sc.data(), 1, MPI_INT, rc.data(), 1, MPI_INT, comm);
-  std::vector<double> flat;
-  for (std::size_t r = 0; r < np; ++r) {
-    sd[r + 1] = sd[r] + sc[r];
-    rd[r + 1] = rd[r] + rc[r];
-    flat.insert(flat.end(), send[r].begin(), send[r].end());
-  }
-  std::vector<double> got(std::size_t(std::max(rd[np], 1)));
-  MPI_Alltoallv(flat.data(), sc.data(), sd.data(), MPI_DOUBLE, got.data(), rc.data(), rd.data(),
-                MPI_DOUBLE, comm);
-  std::vector<std::vector<double>> out(np);
-  for (std::size_t r = 0; r < np; ++r)
-    out[r].assign(got.begin() + rd[r], got.begin() + rd[r + 1]);
-  return out;
 }
 
 // The tree the pieces name (before migration: d.parent_points, m.level):
@@ -2645,14 +2620,9 @@ CoarsenResult coarsen(DistributedMesh &d, const std::vector<char> &marks_in,
       const Mesh &m = d.local;
       const std::size_t nv = m.num_vertices();
       const int n = m.cell_size();
-      auto level = [&](std::size_t v) -> double {
-        return m.level.size() == nv
-                   ? double(m.level[v])
-                   : double(m.parent_edge[2 * v] != kNoVertex ||
-                            !std::isnan(v * 2 * std::size_t(m.dim) < d.parent_points.size()
-                                            ? d.parent_points[v * 2 * m.dim]
-                                            : std::nan("")));
-      };
+      // (Every part with a tree has levels: distribute(), migrate() and
+      // read_pvtu_parts give them, refine() keeps them.)
+      auto level = [&](std::size_t v) { return double(m.level[v]); };
       std::vector<double> around(nv, 0.0);
       for (std::size_t c = 0; c < m.num_cells(); ++c) {
         double top = 0;

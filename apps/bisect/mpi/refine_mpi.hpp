@@ -1,10 +1,9 @@
 // bisect refine under mpirun (a BISECT_MPI build; refine_mpi.cpp).
 #pragma once
 
+#include "bisect/distributed.hpp"
 #include "bisect/io.hpp"
 #include "bisect/mesh.hpp"
-
-#include "bisect/distributed.hpp"
 
 #include <functional>
 #include <optional>
