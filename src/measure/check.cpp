@@ -20,11 +20,13 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <memory>
 #include <new>
 #include <stdexcept>
@@ -136,6 +138,8 @@ constexpr std::size_t kChunkBytes = std::size_t(96) << 20;
 bool g_sorted_final_walk = false;
 bool g_wide_final_walk = false;
 bool g_own_overlap_search = false;
+bool g_overlap_fast_path = true;        // centroids_wound_once before find_overlap
+bool g_overlap_fast_path_taken = false; // what its last call decided
 // The hashing path's piece size (see match_bucket); a test sets it small.
 constexpr std::size_t kMatchPiece = 2048;
 std::size_t g_match_piece = kMatchPiece;
@@ -1184,6 +1188,7 @@ struct FacetReport {
   double boundary_measure = 0;
   double smallest_boundary_facet = INFINITY; // measure
   std::vector<VertexId> boundary;            // Dim sorted ids per boundary facet
+  std::vector<VertexId> boundary_opposite;   // per boundary facet: its cell's other vertex
   std::string
       nonmanifold; // first facet shared by 3+ cells, e.g. "facet (1, 2, 3) is shared by 3 cells"
   std::string overlap; // first folded pair, e.g. "cells 5 and 9 overlap across facet (1, 2, 3)"
@@ -1233,8 +1238,12 @@ template <int Dim, bool SideOnly> struct FacetVisitor {
       const double measure = facet_measure<Dim>(pts);
       r.boundary_measure += measure;
       r.smallest_boundary_facet = std::min(r.smallest_boundary_facet, measure);
-      if (keep_boundary)
+      if (keep_boundary) {
         r.boundary.insert(r.boundary.end(), key.begin(), key.end());
+        const std::uint32_t ref = refs[0] & ~kSideBit;
+        r.boundary_opposite.push_back(
+            mesh->cell(CellId(ref / M))[opposite_of_facet<Dim>(int(ref % M))]);
+      }
     } else if (count == 2) {
       if constexpr (!SideOnly)
         if (keep_interior) {
@@ -1287,6 +1296,8 @@ FacetReport facet_pass(const Mesh &mesh, const std::vector<std::int8_t> *signs, 
     r.boundary_measure += p.boundary_measure;
     r.smallest_boundary_facet = std::min(r.smallest_boundary_facet, p.smallest_boundary_facet);
     r.boundary.insert(r.boundary.end(), p.boundary.begin(), p.boundary.end());
+    r.boundary_opposite.insert(r.boundary_opposite.end(), p.boundary_opposite.begin(),
+                               p.boundary_opposite.end());
     if (r.nonmanifold.empty())
       r.nonmanifold = p.nonmanifold;
     if (r.overlap.empty())
@@ -1784,6 +1795,434 @@ inline void sort_by_key(std::vector<std::uint64_t> &keys, std::vector<CellId> &i
       ids[i] = sorted[i].second;
     }
   }
+}
+
+// ---- the overlap check's fast path ----------------------------------------
+//
+// Once facet_pass has passed (every facet in one or two cells, the two on
+// opposite sides), the cells form a chain whose boundary is the boundary
+// facets: the number of cells holding a point y (off every facet) is the
+// winding number of the boundary around y. A ray from y counts it: each
+// boundary facet it passes through adds 1 where the ray leaves that facet's
+// cell and takes 1 where it enters it. find_overlap fails only where the
+// centroid of some cell lies inside another cell, where that number is at
+// least 2. So when the ray from every centroid counts exactly 1, find_overlap
+// would find nothing and need not run: it runs (and names the pair) only when
+// some count is not 1, or some ray passes too near an edge of a facet, or
+// starts too near one, for its count to be sure. The verdict and the message
+// are find_overlap's in every case.
+//
+// The rays all go one way, r = (1, kSlope...), skew to every axis so that no
+// facet of an axis-aligned box is parallel to them. In sheared coordinates
+// z = (t, u), t = x_0 and u_k = x_{k+1} - kSlope[k] x_0, the ray from y keeps
+// u(y) and runs up t. A facet with vertices z_0..z_{D-1} is met where u(y)
+// lies in the facet's projection: with w_j = u(z_j) - u(y), the numbers
+// D_i = (-1)^i det(w_j, j != i) all have one sign (they are the barycentric
+// coordinates of u(y), times sum D_i), and the meeting point is ahead of y
+// when sum_i D_i (t_i - t(y)) has that sign too. Just before it the ray is on
+// the side (-1)^D sign(sum D) of O(x) = det(z_1 - z_0, ..., x - z_0), so it
+// leaves the facet's cell when that is the side of the cell's other vertex.
+// A determinant within kSure of its largest possible size (the sum of its
+// terms' sizes, or the product of its columns' lengths), plus what rounding
+// the coordinates can change, is not sure.
+//
+// Most rays need not be cast: where a box of a grid over the mesh meets no
+// boundary facet, the count is the same all over it and over the boxes
+// joined to it through such boxes, so one sure count serves all of them.
+constexpr double kSlope[3] = {0.2971832417, 0.1852213817, 0.1127915737};
+constexpr double kSure = 1e-11;
+
+// det of the K x K matrix with columns a[0..K-1] (each K values).
+template <int K> double det_columns(const double (*a)[4]) {
+  if constexpr (K == 1)
+    return a[0][0];
+  else if constexpr (K == 2)
+    return a[0][0] * a[1][1] - a[1][0] * a[0][1];
+  else if constexpr (K == 3)
+    return a[0][0] * (a[1][1] * a[2][2] - a[2][1] * a[1][2]) -
+           a[1][0] * (a[0][1] * a[2][2] - a[2][1] * a[0][2]) +
+           a[2][0] * (a[0][1] * a[1][2] - a[1][1] * a[0][2]);
+  else {
+    // along the first row: minors of rows 1..3
+    double sum = 0, sign = 1;
+    for (int c = 0; c < 4; ++c, sign = -sign) {
+      double m[3][4];
+      for (int j = 0, k = 0; j < 4; ++j)
+        if (j != c) {
+          for (int r = 0; r < 3; ++r)
+            m[k][r] = a[j][r + 1];
+          ++k;
+        }
+      sum += sign * a[c][0] * det_columns<3>(m);
+    }
+    return sum;
+  }
+}
+
+template <int K> double column_length(const double *a) {
+  double s = 0;
+  for (int k = 0; k < K; ++k)
+    s += a[k] * a[k];
+  return std::sqrt(s);
+}
+
+template <int Dim> void shear(const double *x, double *z) {
+  z[0] = x[0];
+  for (int k = 0; k + 1 < Dim; ++k)
+    z[k + 1] = x[k + 1] - kSlope[k] * x[0];
+}
+
+template <int Dim>
+bool centroids_wound_once(const Mesh &mesh, const std::vector<VertexId> &bnd,
+                          const std::vector<VertexId> &opposite) {
+  constexpr int U = Dim - 1, N = Dim + 1;
+  g_overlap_fast_path_taken = false;
+  const std::size_t nb = bnd.size() / Dim, nc = mesh.num_cells();
+  if (nb == 0 || nc == 0 || opposite.size() != nb)
+    return false;
+  const int workers = int(std::clamp<std::size_t>(nc >> 15, 1, std::size_t(threads())));
+
+  // Per facet: t of its sheared vertices, u of the first, the box of their
+  // u, the side of O on which its cell lies (0: not sure) and each D_i as an
+  // affine function of the offset v = u(y) - u(z_0): D_i = coef_i0 +
+  // sum_k coef_i(k+1) v_k, exact in exact arithmetic (det is linear in each
+  // column, and v appears in every column once).
+  std::vector<double> ft(nb * Dim), fu(nb * U), fbox(nb * 2 * U), coef(nb * Dim * Dim);
+  std::vector<std::int8_t> side(nb);
+  double umax = 0, tmax = 0; // the largest |u| and |t|, for the rounding of differences
+#pragma omp parallel for num_threads(workers) schedule(static) reduction(max : umax, tmax)
+  for (std::size_t f = 0; f < nb; ++f) {
+    double z[Dim][Dim];
+    for (int j = 0; j < Dim; ++j)
+      shear<Dim>(mesh.point(bnd[f * Dim + std::size_t(j)]), z[j]);
+    double *box = &fbox[f * 2 * U];
+    double scale = 0;
+    for (int k = 0; k < U; ++k) {
+      fu[f * U + std::size_t(k)] = z[0][k + 1];
+      box[k] = box[U + k] = z[0][k + 1];
+      for (int j = 1; j < Dim; ++j) {
+        box[k] = std::min(box[k], z[j][k + 1]);
+        box[U + k] = std::max(box[U + k], z[j][k + 1]);
+      }
+      scale = std::max(scale, box[U + k] - box[k]);
+      umax = std::max({umax, std::abs(box[k]), std::abs(box[U + k])});
+    }
+    for (int j = 0; j < Dim; ++j) {
+      ft[f * Dim + std::size_t(j)] = z[j][0];
+      tmax = std::max(tmax, std::abs(z[j][0]));
+    }
+    // D_i at v = 0 and at v = scale e_k.
+    auto d_at = [&](int i, int k) {
+      double cols[4][4];
+      for (int j = 0, c = 0; j < Dim; ++j)
+        if (j != i) {
+          for (int m = 0; m < U; ++m)
+            cols[c][m] = z[j][m + 1] - z[0][m + 1] - (m == k ? scale : 0.0);
+          ++c;
+        }
+      return (i % 2 ? -1.0 : 1.0) * det_columns<U>(cols);
+    };
+    for (int i = 0; i < Dim; ++i) {
+      double *ci = &coef[(f * Dim + std::size_t(i)) * Dim];
+      ci[0] = d_at(i, -1);
+      for (int k = 0; k < U; ++k)
+        ci[k + 1] = scale > 0 ? (d_at(i, k) - ci[0]) / scale : 0.0;
+    }
+    double q[Dim], cols[4][4];
+    shear<Dim>(mesh.point(opposite[f]), q);
+    double bound = 1;
+    for (int j = 0; j < Dim; ++j) {
+      for (int k = 0; k < Dim; ++k)
+        cols[j][k] = (j + 1 < Dim ? z[j + 1][k] : q[k]) - z[0][k];
+      bound *= column_length<Dim>(cols[j]);
+    }
+    const double o = det_columns<Dim>(cols);
+    side[f] = std::int8_t(o > kSure * bound ? 1 : o < -kSure * bound ? -1 : 0);
+  }
+  // The rounding of v: a few units in the last place of the largest |u|.
+  const double vround = 8 * std::numeric_limits<double>::epsilon() * umax;
+  const double tround = 8 * std::numeric_limits<double>::epsilon() * tmax;
+
+  // A grid over u: about two cells per facet, each facet listed in the
+  // cells its box covers.
+  double lo[U], hi[U];
+  std::fill(lo, lo + U, 1e300);
+  std::fill(hi, hi + U, -1e300);
+  for (std::size_t f = 0; f < nb; ++f)
+    for (int k = 0; k < U; ++k) {
+      lo[k] = std::min(lo[k], fbox[f * 2 * U + std::size_t(k)]);
+      hi[k] = std::max(hi[k], fbox[f * 2 * U + std::size_t(U + k)]);
+    }
+  double volume = 1;
+  int spread = 0;
+  for (int k = 0; k < U; ++k)
+    if (hi[k] > lo[k]) {
+      volume *= hi[k] - lo[k];
+      ++spread;
+    }
+  if (!(std::isfinite(volume)) || spread < U)
+    return false; // a flat or infinite projection: leave it to find_overlap
+  const double side_length = std::pow(volume / (2.0 * double(nb)), 1.0 / U);
+  std::int64_t cells[U];
+  double size[U];
+  std::size_t total = 1;
+  for (int k = 0; k < U; ++k) {
+    cells[k] = std::clamp<std::int64_t>(std::int64_t((hi[k] - lo[k]) / side_length) + 1, 1, 4096);
+    size[k] = (hi[k] - lo[k]) / double(cells[k]);
+    total *= std::size_t(cells[k]);
+  }
+  auto index = [&](double x, int k) { return grid_cell((x - lo[k]) / size[k], cells[k]); };
+  std::vector<std::uint32_t> start(total + 1, 0);
+  auto each_cell = [&](std::size_t f, auto &&visit) {
+    const double *box = &fbox[f * 2 * U];
+    std::int64_t a[U], b[U], at[U];
+    for (int k = 0; k < U; ++k) {
+      a[k] = at[k] = index(box[k], k);
+      b[k] = index(box[U + k], k);
+    }
+    while (true) {
+      std::size_t g = 0;
+      for (int k = U - 1; k >= 0; --k)
+        g = g * std::size_t(cells[k]) + std::size_t(at[k]);
+      visit(g);
+      int k = 0;
+      while (k < U && at[k] == b[k])
+        at[k] = a[k], ++k;
+      if (k == U)
+        break;
+      ++at[k];
+    }
+  };
+  std::size_t entries = 0;
+  for (std::size_t f = 0; f < nb; ++f)
+    each_cell(f, [&](std::size_t g) { ++start[g + 1], ++entries; });
+  if (entries > 64 * nb + (std::size_t(1) << 20))
+    return false; // facets far larger than the grid's cells: not worth it
+  for (std::size_t g = 0; g < total; ++g)
+    start[g + 1] += start[g];
+  std::vector<std::uint32_t> listed(entries);
+  {
+    std::vector<std::uint32_t> at(start.begin(), start.end() - 1);
+    for (std::size_t f = 0; f < nb; ++f)
+      each_cell(f, [&](std::size_t g) { listed[at[g]++] = std::uint32_t(f); });
+  }
+
+  // The count along the ray from y (sheared), kUnsure when not sure. D_i is
+  // sure when it exceeds kSure times the sum of its terms' sizes plus what
+  // the rounding of v can change.
+  constexpr int kUnsure = std::numeric_limits<int>::min();
+  // What facet f adds to the count from y (sheared) where the ray meets it
+  // before t = until (+1, -1 or 0), kUnsure when not sure.
+  auto cross = [&](std::size_t f, const double *y, double until) {
+    const double *box = &fbox[f * 2 * U];
+    bool in = true;
+    for (int k = 0; k < U; ++k)
+      in &= (y[k + 1] >= box[k]) & (y[k + 1] <= box[U + k]);
+    if (!in)
+      return 0;
+    double v[U];
+    for (int k = 0; k < U; ++k)
+      v[k] = y[k + 1] - fu[f * U + std::size_t(k)];
+    double d[Dim], sum = 0;
+    bool positive = false, negative = false, unsure = false;
+    for (int i = 0; i < Dim; ++i) {
+      const double *ci = &coef[(f * Dim + std::size_t(i)) * Dim];
+      double value = ci[0], size = std::abs(ci[0]), slope = 0;
+      for (int k = 0; k < U; ++k) {
+        value += ci[k + 1] * v[k];
+        size += std::abs(ci[k + 1] * v[k]);
+        slope += std::abs(ci[k + 1]);
+      }
+      const double margin = kSure * size + slope * vround;
+      d[i] = value;
+      sum += value;
+      positive |= value > margin;
+      negative |= value < -margin;
+      unsure |= !(std::abs(value) > margin);
+      if (positive && negative)
+        return 0; // surely outside the projection
+    }
+    if (unsure || side[f] == 0)
+      return kUnsure;
+    // The meeting point's t against t0: the sign of sum_i d_i (t_i - t0)
+    // over that of sum d, sure or not.
+    auto after = [&](double t0) {
+      double ahead = 0, bound = 0, weight = 0;
+      for (int i = 0; i < Dim; ++i) {
+        const double dt = ft[f * Dim + std::size_t(i)] - t0;
+        ahead += d[i] * dt;
+        bound += std::abs(d[i] * dt);
+        weight += std::abs(d[i]);
+      }
+      if (!(std::abs(ahead) > kSure * bound + weight * tround))
+        return kUnsure;
+      return (ahead > 0) == (sum > 0) ? 1 : 0;
+    };
+    const int past_y = after(y[0]);
+    if (past_y != 1)
+      return past_y; // behind y, or not sure
+    if (until < 1e300) {
+      const int past_end = after(until);
+      if (past_end != 0)
+        return past_end == 1 ? 0 : kUnsure; // beyond the end
+    }
+    const int before = (Dim % 2 ? -1 : 1) * (sum > 0 ? 1 : -1);
+    return before == side[f] ? 1 : -1;
+  };
+  auto winding = [&](const double *y) {
+    int count = 0;
+    std::size_t g = 0;
+    for (int k = U - 1; k >= 0; --k) {
+      if (!(y[k + 1] >= lo[k] && y[k + 1] <= hi[k]))
+        return 0; // no facet around
+      g = g * std::size_t(cells[k]) + std::size_t(index(y[k + 1], k));
+    }
+    for (std::uint32_t e = start[g]; e < start[g + 1]; ++e) {
+      const int c = cross(listed[e], y, 1e300);
+      if (c == kUnsure)
+        return kUnsure;
+      count += c;
+    }
+    return count;
+  };
+
+  // Boxes of a grid over the mesh (about one per 4 cells) that no boundary
+  // facet's box meets: the count is the same everywhere in such a box, and
+  // in face-adjacent ones (their union is connected and meets no boundary
+  // facet), so each connected region of them takes its count from the
+  // first centroid in it whose own count is sure; a centroid in a box a
+  // facet meets counts its own.
+  double glo[Dim], ghi[Dim];
+  std::fill(glo, glo + Dim, 1e300);
+  std::fill(ghi, ghi + Dim, -1e300);
+  for (std::size_t v = 0; v < mesh.num_vertices(); ++v)
+    for (int k = 0; k < Dim; ++k) {
+      glo[k] = std::min(glo[k], mesh.point(VertexId(v))[k]);
+      ghi[k] = std::max(ghi[k], mesh.point(VertexId(v))[k]);
+    }
+  double gvolume = 1, reach = 0;
+  for (int k = 0; k < Dim; ++k) {
+    gvolume *= ghi[k] - glo[k];
+    reach = std::max({reach, std::abs(glo[k]), std::abs(ghi[k])});
+  }
+  if (!(gvolume > 0) || !std::isfinite(gvolume))
+    return false;
+  const double gside = std::pow(gvolume / std::max(1.0, double(nc) / 4), 1.0 / Dim);
+  std::int64_t gn[Dim];
+  double gsize[Dim];
+  std::size_t boxes = 1;
+  for (int k = 0; k < Dim; ++k) {
+    gn[k] = std::clamp<std::int64_t>(std::int64_t((ghi[k] - glo[k]) / gside) + 1, 1, 1 << 14);
+    gsize[k] = (ghi[k] - glo[k]) / double(gn[k]);
+    boxes *= std::size_t(gn[k]);
+  }
+  if (boxes > 4 * nc + 1024)
+    return false;
+  auto gindex = [&](double x, int k) { return grid_cell((x - glo[k]) / gsize[k], gn[k]); };
+  // Marked: a facet's box, widened by far more than rounding, meets it.
+  constexpr std::uint32_t kMet = ~std::uint32_t(0);
+  std::vector<std::uint32_t> region(boxes, 0);
+  {
+    const double widen = 1e-9 * reach;
+    std::size_t marks = 0;
+    for (std::size_t f = 0; f < nb; ++f) {
+      std::int64_t a[Dim], b[Dim], at[Dim];
+      for (int k = 0; k < Dim; ++k) {
+        double l = 1e300, h = -1e300;
+        for (int j = 0; j < Dim; ++j) {
+          const double x = mesh.point(bnd[f * Dim + std::size_t(j)])[k];
+          l = std::min(l, x);
+          h = std::max(h, x);
+        }
+        a[k] = at[k] = gindex(l - widen, k);
+        b[k] = gindex(h + widen, k);
+      }
+      while (true) {
+        std::size_t g = 0;
+        for (int k = Dim - 1; k >= 0; --k)
+          g = g * std::size_t(gn[k]) + std::size_t(at[k]);
+        region[g] = kMet;
+        if (++marks > (std::size_t(64) << 20))
+          return false; // facets far larger than the boxes: not worth it
+        int k = 0;
+        while (k < Dim && at[k] == b[k])
+          at[k] = a[k], ++k;
+        if (k == Dim)
+          break;
+        ++at[k];
+      }
+    }
+  }
+  // The regions: numbered from 1 by a flood over face neighbours.
+  std::uint32_t regions = 0;
+  {
+    std::vector<std::size_t> stride(Dim), queue;
+    for (int k = 0; k < Dim; ++k)
+      stride[std::size_t(k)] = k == 0 ? 1 : stride[std::size_t(k - 1)] * std::size_t(gn[k - 1]);
+    for (std::size_t g0 = 0; g0 < boxes; ++g0) {
+      if (region[g0] != 0)
+        continue;
+      region[g0] = ++regions;
+      queue.assign(1, g0);
+      while (!queue.empty()) {
+        const std::size_t g = queue.back();
+        queue.pop_back();
+        for (int k = 0; k < Dim; ++k) {
+          const std::size_t i = g / stride[std::size_t(k)] % std::size_t(gn[k]);
+          if (i > 0 && region[g - stride[std::size_t(k)]] == 0) {
+            region[g - stride[std::size_t(k)]] = regions;
+            queue.push_back(g - stride[std::size_t(k)]);
+          }
+          if (i + 1 < std::size_t(gn[k]) && region[g + stride[std::size_t(k)]] == 0) {
+            region[g + stride[std::size_t(k)]] = regions;
+            queue.push_back(g + stride[std::size_t(k)]);
+          }
+        }
+      }
+    }
+  }
+  // Per region: its count once known (kUnknown before).
+  constexpr int kUnknown = std::numeric_limits<int>::max();
+  std::vector<std::atomic<int>> count_of(std::size_t(regions) + 1);
+  for (auto &c : count_of)
+    c.store(kUnknown, std::memory_order_relaxed);
+
+  constexpr std::size_t kBlock = std::size_t(1) << 13;
+  const std::size_t blocks = (nc + kBlock - 1) / kBlock;
+  std::atomic<bool> sure{true};
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
+  for (std::size_t b = 0; b < blocks; ++b) {
+    if (!sure.load(std::memory_order_relaxed))
+      continue;
+    double pts[N * Dim];
+    for (std::size_t c = b * kBlock; c < std::min(nc, (b + 1) * kBlock); ++c) {
+      gather<Dim>(mesh, mesh.cell(CellId(c)), N, pts);
+      double x[Dim], y[Dim];
+      for (int k = 0; k < Dim; ++k) {
+        double sum = 0;
+        for (int i = 0; i < N; ++i)
+          sum += pts[i * Dim + k];
+        x[k] = sum / N;
+      }
+      std::size_t g = 0;
+      for (int k = Dim - 1; k >= 0; --k)
+        g = g * std::size_t(gn[k]) + std::size_t(gindex(x[k], k));
+      const std::uint32_t r = region[g];
+      int count = r == kMet ? kUnknown : count_of[r].load(std::memory_order_relaxed);
+      if (count == kUnknown) {
+        shear<Dim>(x, y);
+        count = winding(y);
+        if (r != kMet && count != kUnsure)
+          count_of[r].store(count, std::memory_order_relaxed);
+      }
+      if (count != 1) {
+        sure = false;
+        break;
+      }
+    }
+  }
+  g_overlap_fast_path_taken = sure;
+  return sure;
 }
 
 template <int Dim> std::string find_overlap(const Mesh &mesh) {
@@ -2886,8 +3325,9 @@ void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &prog
     if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
       reject("non-conforming input: " + s);
     step("looking for overlapping cells", 0.6);
-    if (std::string s = find_overlap<D>(mesh); !s.empty())
-      reject("tangled: " + s);
+    if (!g_overlap_fast_path || !centroids_wound_once<D>(mesh, fr.boundary, fr.boundary_opposite))
+      if (std::string s = find_overlap<D>(mesh); !s.empty())
+        reject("tangled: " + s);
     step("checking the angles around faces", 0.75);
     std::size_t ridges = std::size_t(-1);
     if (std::string s = find_fold<D>(mesh, &ridges); !s.empty())
@@ -2929,5 +3369,11 @@ double rough_angle(double y, double x) {
 }
 void use_own_overlap_search(bool on) {
   g_own_overlap_search = on;
+}
+void use_overlap_fast_path(bool on) {
+  g_overlap_fast_path = on;
+}
+bool overlap_fast_path_taken() {
+  return g_overlap_fast_path_taken;
 }
 } // namespace bisect::testing

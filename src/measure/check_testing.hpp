@@ -29,6 +29,13 @@ void use_wide_final_walk(bool on);
 // (what a cell at a group's edge does), so a test can compare the two.
 void use_own_overlap_search(bool on);
 
+// Before the overlap search, prepare_input counts the boundary facets a ray
+// from each centroid passes (centroids_wound_once in check.cpp) and skips
+// the search when every count is surely 1. With `on` false it never does;
+// overlap_fast_path_taken() tells whether the last count was sure.
+void use_overlap_fast_path(bool on);
+bool overlap_fast_path_taken();
+
 // The angle check's quick atan2(y, x) for y >= 0 (rough_angle in check.cpp),
 // which must stay within 2e-5 of std::atan2 for its shortcut to be safe.
 double rough_angle(double y, double x);

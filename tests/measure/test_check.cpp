@@ -7,6 +7,7 @@
 #include "bisect/refine.hpp"
 #include "bisect/threads.hpp"
 #include "measure/check_testing.hpp"
+#include "support.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -930,6 +931,127 @@ TEST_CASE("overlap: the search by groups finds what each cell's own search finds
     set_threads(0);
   }
   CHECK(found >= 9);
+}
+
+// ---- the overlap check's fast path (centroids_wound_once in check.cpp) ----
+
+namespace {
+
+// prepare_input's message and whether the ray count settled the overlap
+// check (testing::overlap_fast_path_taken).
+std::pair<std::string, bool> prepare_fast(const Mesh &m) {
+  const std::string s = prepare_error(m, "t.vtu");
+  return {s, testing::overlap_fast_path_taken()};
+}
+
+// Two copies of `m`, the second moved by `shift` along every axis.
+Mesh two_copies(const Mesh &m, double shift) {
+  Mesh two = m;
+  const VertexId nv = VertexId(m.num_vertices());
+  for (std::size_t v = 0; v < m.num_vertices(); ++v) {
+    std::vector<double> x(m.point(VertexId(v)), m.point(VertexId(v)) + m.dim);
+    for (double &xi : x)
+      xi += shift;
+    add_vertex(two, x);
+  }
+  for (VertexId id : m.cells)
+    two.cells.push_back(id + nv);
+  return two;
+}
+
+} // namespace
+
+TEST_CASE("overlap fast path: every centroid of a valid mesh counts one cell, so the search is "
+          "skipped",
+          "[check][overlap][2d][3d][4d]") {
+  struct Case {
+    std::string name;
+    Mesh mesh;
+  };
+  std::vector<Case> cases;
+  for (int dim : {2, 3, 4}) {
+    cases.push_back(
+        {"graded Kuhn " + std::to_string(dim) + "D", graded_kuhn(dim, dim == 4 ? 2 : 4)});
+    // axis-aligned faces and rational centroids: rays skew to every axis
+    cases.push_back({"Kuhn " + std::to_string(dim) + "D", generate_kuhn(dim, dim == 4 ? 3 : 6)});
+    // two bodies apart (two regions of the boxes' grid, counts 1 and 0
+    // between them), and one far from the origin
+    cases.push_back(
+        {"two Kuhn cubes " + std::to_string(dim) + "D", two_copies(generate_kuhn(dim, 2), 1.5)});
+    Mesh far = generate_kuhn(dim, 3);
+    for (double &x : far.coords)
+      x = 1e6 + 1e-3 * x;
+    cases.push_back({"Kuhn far from the origin " + std::to_string(dim) + "D", far});
+  }
+  for (const char *name : {"square.msh", "ball.msh", "cylinder.msh", "octant.msh"}) {
+    Mesh m = read_mesh(testing::data_path(name));
+    cases.push_back({name, m});
+  }
+  // A mesh with a hole: the Kuhn square without its centre cells.
+  {
+    Mesh m = generate_kuhn(2, 6);
+    Mesh holed = m;
+    holed.cells.clear();
+    for (std::size_t c = 0; c < m.num_cells(); ++c) {
+      double x = 0, y = 0;
+      for (int i = 0; i < 3; ++i) {
+        x += m.point(m.cell(CellId(c))[i])[0] / 3;
+        y += m.point(m.cell(CellId(c))[i])[1] / 3;
+      }
+      if (std::abs(x - 0.5) > 0.2 || std::abs(y - 0.5) > 0.2)
+        holed.cells.insert(holed.cells.end(), m.cell(CellId(c)), m.cell(CellId(c)) + 3);
+    }
+    cases.push_back({"square with a hole", holed});
+  }
+  for (int threads : {1, 2}) {
+    set_threads(threads);
+    for (const Case &c : cases) {
+      INFO(c.name << ", " << c.mesh.num_cells() << " cells, " << threads << " threads");
+      const auto [message, fast] = prepare_fast(c.mesh);
+      CHECK(message == "no error");
+      CHECK(fast);
+    }
+  }
+  set_threads(0);
+}
+
+TEST_CASE("overlap fast path: where a centroid lies in two cells the count is not one, and the "
+          "search names the pair",
+          "[check][overlap][2d][3d][4d]") {
+  const int dim = GENERATE(2, 3, 4);
+  const Mesh m = graded_kuhn(dim, dim == 4 ? 2 : 4);
+  // A second copy a third of the cube away (no vertex on another): the
+  // centroids where both lie count 2.
+  {
+    const Mesh two = two_copies(m, 0.31831);
+    const auto [message, fast] = prepare_fast(two);
+    CHECK_THAT(message, StartsWith("t.vtu: tangled: cells "));
+    CHECK_FALSE(fast);
+  }
+  // Cells laid over the mesh, as in the search's own tests: the search runs
+  // whenever the count is not sure, and its finding is the brute force's.
+  int found = 0;
+  for (int k = 0; k < 8; ++k) {
+    Mesh bad = m;
+    std::vector<double> where(static_cast<std::size_t>(dim));
+    for (int d = 0; d < dim; ++d)
+      where[std::size_t(d)] = 0.05 + 0.9 * std::fmod(0.37 * (k + 1) * (d + 2), 1.0);
+    const double scale = std::array{0.3, 0.9, 2.37, 5.3}[std::size_t(k % 4)];
+    const CellId extra = add_scaled_copy(bad, where, scale);
+    const std::string expected = expected_overlap(bad, {extra}, "t.vtu");
+    INFO("dim " << dim << ", case " << k << ", scale " << scale);
+    const auto [message, fast] = prepare_fast(bad);
+    CHECK(message == expected);
+    if (expected != "no error") {
+      ++found;
+      CHECK_FALSE(fast);
+    }
+    // without the fast path: the same verdict and message
+    testing::use_overlap_fast_path(false);
+    CHECK(prepare_error(bad, "t.vtu") == expected);
+    testing::use_overlap_fast_path(true);
+  }
+  CHECK(found >= 5);
 }
 
 TEST_CASE("input facts: validation's invariants and interior facets are those measured apart "
