@@ -28,6 +28,7 @@
 #include <cstdlib>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -140,6 +141,9 @@ bool g_wide_final_walk = false;
 bool g_own_overlap_search = false;
 bool g_overlap_fast_path = true;        // centroids_wound_once before find_overlap
 bool g_overlap_fast_path_taken = false; // what its last call decided
+// The faces the angle check skipped, when a test asks (see check_testing.hpp).
+std::vector<std::vector<VertexId>> *g_skipped_faces = nullptr;
+std::mutex g_skipped_faces_mutex;
 // The hashing path's piece size (see match_bucket); a test sets it small.
 constexpr std::size_t kMatchPiece = 2048;
 std::size_t g_match_piece = kMatchPiece;
@@ -1872,9 +1876,31 @@ template <int Dim> void shear(const double *x, double *z) {
     z[k + 1] = x[k + 1] - kSlope[k] * x[0];
 }
 
+// What centroids_wound_once learnt: the boxes of its grid, and which of them
+// surely have count 1 all over (no boundary facet meets them, and a sure ray
+// from a centroid in their region counted 1).
+template <int Dim> struct WoundBoxes {
+  double lo[Dim], size[Dim];
+  std::int64_t n[Dim];
+  std::vector<std::uint8_t> one; // per box
+
+  // Whether the count is surely 1 at x and all around it.
+  bool one_at(const double *x) const {
+    std::size_t g = 0;
+    for (int k = Dim - 1; k >= 0; --k) {
+      const double t = (x[k] - lo[k]) / size[k];
+      if (!(t >= 0 && t < double(n[k])))
+        return false;
+      g = g * std::size_t(n[k]) + std::size_t(grid_cell(t, n[k]));
+    }
+    return one[g] != 0;
+  }
+};
+
 template <int Dim>
 bool centroids_wound_once(const Mesh &mesh, const std::vector<VertexId> &bnd,
-                          const std::vector<VertexId> &opposite) {
+                          const std::vector<VertexId> &opposite,
+                          WoundBoxes<Dim> *boxes_out = nullptr) {
   constexpr int U = Dim - 1, N = Dim + 1;
   g_overlap_fast_path_taken = false;
   const std::size_t nb = bnd.size() / Dim, nc = mesh.num_cells();
@@ -2222,6 +2248,15 @@ bool centroids_wound_once(const Mesh &mesh, const std::vector<VertexId> &bnd,
     }
   }
   g_overlap_fast_path_taken = sure;
+  if (sure && boxes_out) {
+    std::copy(glo, glo + Dim, boxes_out->lo);
+    std::copy(gsize, gsize + Dim, boxes_out->size);
+    std::copy(gn, gn + Dim, boxes_out->n);
+    boxes_out->one.assign(boxes, 0);
+    for (std::size_t g = 0; g < boxes; ++g)
+      boxes_out->one[g] =
+          region[g] != kMet && count_of[region[g]].load(std::memory_order_relaxed) == 1;
+  }
   return sure;
 }
 
@@ -2954,11 +2989,30 @@ template <int Dim> struct FoldVisitor {
   AngleFinding f;
   std::string found;
   std::size_t faces = 0; // distinct faces visited
-  explicit FoldVisitor(const Mesh &m) : mesh(&m), star(m) {}
+  const WoundBoxes<Dim> *wound = nullptr;
+  explicit FoldVisitor(const Mesh &m, const WoundBoxes<Dim> *w = nullptr)
+      : mesh(&m), star(m), wound(w) {}
   void operator()(const std::array<VertexId, Dim - 1> &key, const std::uint32_t *refs, int count) {
     ++faces;
     if (!found.empty())
       return;
+    if (wound) {
+      // Where the count is surely 1 around the face's midpoint (the same
+      // sum for every cell: the key is sorted), its cells go round it once.
+      double mid[Dim] = {};
+      for (VertexId v : key)
+        for (int d = 0; d < Dim; ++d)
+          mid[d] += mesh->point(v)[d];
+      for (int d = 0; d < Dim; ++d)
+        mid[d] /= Dim - 1;
+      if (wound->one_at(mid)) {
+        if (g_skipped_faces) {
+          std::lock_guard<std::mutex> lock(g_skipped_faces_mutex);
+          g_skipped_faces->emplace_back(key.begin(), key.end());
+        }
+        return;
+      }
+    }
     extras.clear();
     for (int i = 0; i < count; ++i) {
       const VertexId *cell = mesh->cell(CellId(refs[i] / M));
@@ -2974,7 +3028,12 @@ template <int Dim> struct FoldVisitor {
 
 // `faces`, when given and in 3D or 4D, receives the number of distinct faces of
 // Dim - 1 vertices (edges in 3D, triangles in 4D).
-template <int Dim> std::string find_fold(const Mesh &mesh, std::size_t *faces = nullptr) {
+// With `wound` (from centroids_wound_once), faces where the count is surely
+// 1 all around are skipped: a face whose cells went round it k times would
+// have count k near it.
+template <int Dim>
+std::string find_fold(const Mesh &mesh, std::size_t *faces = nullptr,
+                      const WoundBoxes<Dim> *wound = nullptr) {
   if constexpr (Dim == 2) {
     constexpr int N = Dim + 1;
     const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
@@ -3008,6 +3067,13 @@ template <int Dim> std::string find_fold(const Mesh &mesh, std::size_t *faces = 
         for (std::size_t v = k * kBlock; v < std::min(nv, (k + 1) * kBlock); ++v) {
           const int n = int(start[v + 1] - start[v]);
           const VertexId face = VertexId(v);
+          if (wound && wound->one_at(mesh.point(face))) {
+            if (g_skipped_faces) {
+              std::lock_guard<std::mutex> lock(g_skipped_faces_mutex);
+              g_skipped_faces->push_back({face});
+            }
+            continue;
+          }
           if (n > 0 && star.tangled(&face, &pairs[2 * start[v]], n, f)) {
             found[k] = angle_message(vertex_name(mesh, VertexId(v)), f, 2);
             break;
@@ -3022,7 +3088,7 @@ template <int Dim> std::string find_fold(const Mesh &mesh, std::size_t *faces = 
     // The faces' stars in blocks of the walk, by all threads; the first
     // finding in block order (key order), as one walk in one thread.
     std::vector<FoldVisitor<Dim>> parts;
-    for_each_subsimplex_blocks<Dim, Dim - 1>(mesh, FoldVisitor<Dim>(mesh), parts);
+    for_each_subsimplex_blocks<Dim, Dim - 1>(mesh, FoldVisitor<Dim>(mesh, wound), parts);
     if (faces) {
       *faces = 0;
       for (const FoldVisitor<Dim> &part : parts)
@@ -3325,12 +3391,15 @@ void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &prog
     if (std::string s = find_hanging_node<D>(mesh, fr.boundary); !s.empty())
       reject("non-conforming input: " + s);
     step("looking for overlapping cells", 0.6);
-    if (!g_overlap_fast_path || !centroids_wound_once<D>(mesh, fr.boundary, fr.boundary_opposite))
+    WoundBoxes<D> wound;
+    const bool sure = g_overlap_fast_path &&
+                      centroids_wound_once<D>(mesh, fr.boundary, fr.boundary_opposite, &wound);
+    if (!sure)
       if (std::string s = find_overlap<D>(mesh); !s.empty())
         reject("tangled: " + s);
     step("checking the angles around faces", 0.75);
     std::size_t ridges = std::size_t(-1);
-    if (std::string s = find_fold<D>(mesh, &ridges); !s.empty())
+    if (std::string s = find_fold<D>(mesh, &ridges, sure ? &wound : nullptr); !s.empty())
       reject(s);
     // What the walks found, for the caller (the same values as
     // measure_invariants: the same passes, summed in the same order).
@@ -3375,5 +3444,8 @@ void use_overlap_fast_path(bool on) {
 }
 bool overlap_fast_path_taken() {
   return g_overlap_fast_path_taken;
+}
+void record_skipped_faces(std::vector<std::vector<VertexId>> *out) {
+  g_skipped_faces = out;
 }
 } // namespace bisect::testing

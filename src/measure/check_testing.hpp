@@ -1,7 +1,10 @@
 // Test hooks of the checks (not part of the installed API).
 #pragma once
 
+#include "bisect/mesh.hpp"
+
 #include <cstddef>
+#include <vector>
 
 namespace bisect::testing {
 
@@ -35,6 +38,11 @@ void use_own_overlap_search(bool on);
 // overlap_fast_path_taken() tells whether the last count was sure.
 void use_overlap_fast_path(bool on);
 bool overlap_fast_path_taken();
+
+// When the count was sure, the angle check skips the faces where it is
+// surely 1 all around (find_fold in check.cpp); with `out`, each skipped
+// face's sorted vertex ids are appended there (null: not recorded).
+void record_skipped_faces(std::vector<std::vector<VertexId>> *out);
 
 // The angle check's quick atan2(y, x) for y >= 0 (rough_angle in check.cpp),
 // which must stay within 2e-5 of std::atan2 for its shortcut to be safe.

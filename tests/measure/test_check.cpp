@@ -14,6 +14,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <set>
 #include <vector>
 
 using namespace bisect;
@@ -1052,6 +1054,60 @@ TEST_CASE("overlap fast path: where a centroid lies in two cells the count is no
     testing::use_overlap_fast_path(true);
   }
   CHECK(found >= 5);
+}
+
+TEST_CASE("overlap fast path: the angle check skips only interior faces, where the count is 1 "
+          "all around, and still finds every fold",
+          "[check][overlap][2d][3d][4d]") {
+  const int dim = GENERATE(2, 3, 4);
+  std::vector<Mesh> meshes{graded_kuhn(dim, dim == 4 ? 2 : 6)};
+  if (dim != 4)
+    meshes.push_back(read_mesh(testing::data_path(dim == 2 ? "square.msh" : "ball.msh")));
+  for (const Mesh &m : meshes)
+    for (int threads : {1, 2}) {
+      set_threads(threads);
+      std::vector<std::vector<VertexId>> skipped;
+      testing::record_skipped_faces(&skipped);
+      const auto [message, fast] = prepare_fast(m);
+      testing::record_skipped_faces(nullptr);
+      INFO("dim " << dim << ", " << m.num_cells() << " cells, " << threads << " threads");
+      REQUIRE(message == "no error");
+      REQUIRE(fast);
+      // The faces (dim - 1 vertices) of the boundary facets, and all faces.
+      std::set<std::vector<VertexId>> boundary, all;
+      std::map<std::vector<VertexId>, int> facets;
+      auto without = [](const std::vector<VertexId> &x, std::size_t i) {
+        std::vector<VertexId> y;
+        for (std::size_t k = 0; k < x.size(); ++k)
+          if (k != i)
+            y.push_back(x[k]);
+        return y;
+      };
+      for (std::size_t c = 0; c < m.num_cells(); ++c) {
+        std::vector<VertexId> x(m.cell(CellId(c)), m.cell(CellId(c)) + dim + 1);
+        std::sort(x.begin(), x.end());
+        for (std::size_t i = 0; i < x.size(); ++i) {
+          const std::vector<VertexId> f = without(x, i);
+          ++facets[f];
+          for (std::size_t j = 0; j < f.size(); ++j)
+            all.insert(without(f, j));
+        }
+      }
+      for (const auto &[f, count] : facets)
+        if (count == 1)
+          for (std::size_t j = 0; j < f.size(); ++j)
+            boundary.insert(without(f, j));
+      std::set<std::vector<VertexId>> seen;
+      for (const auto &g : skipped) {
+        CHECK(all.count(g) == 1);
+        CHECK(boundary.count(g) == 0);
+        CHECK(seen.insert(g).second);
+      }
+      // some interior faces, not all faces
+      CHECK(!skipped.empty());
+      CHECK(skipped.size() < all.size() - boundary.size());
+    }
+  set_threads(0);
 }
 
 TEST_CASE("input facts: validation's invariants and interior facets are those measured apart "
