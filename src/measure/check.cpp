@@ -1870,6 +1870,29 @@ template <int K> double column_length(const double *a) {
   return std::sqrt(s);
 }
 
+// Calls visit(g) for every box g of a K-dimensional grid of n[k] boxes a
+// side (g numbered with the first coordinate fastest) from corner a to
+// corner b; stops when visit returns false.
+template <int K, class Visit>
+void for_each_box(const std::int64_t *a, const std::int64_t *b, const std::int64_t *n,
+                  Visit &&visit) {
+  std::int64_t at[K];
+  std::copy(a, a + K, at);
+  while (true) {
+    std::size_t g = 0;
+    for (int k = K - 1; k >= 0; --k)
+      g = g * std::size_t(n[k]) + std::size_t(at[k]);
+    if (!visit(g))
+      return;
+    int k = 0;
+    while (k < K && at[k] == b[k])
+      at[k] = a[k], ++k;
+    if (k == K)
+      return;
+    ++at[k];
+  }
+}
+
 template <int Dim> void shear(const double *x, double *z) {
   z[0] = x[0];
   for (int k = 0; k + 1 < Dim; ++k)
@@ -2001,23 +2024,15 @@ bool centroids_wound_once(const Mesh &mesh, const std::vector<VertexId> &bnd,
   std::vector<std::uint32_t> start(total + 1, 0);
   auto each_cell = [&](std::size_t f, auto &&visit) {
     const double *box = &fbox[f * 2 * U];
-    std::int64_t a[U], b[U], at[U];
+    std::int64_t a[U], b[U];
     for (int k = 0; k < U; ++k) {
-      a[k] = at[k] = index(box[k], k);
+      a[k] = index(box[k], k);
       b[k] = index(box[U + k], k);
     }
-    while (true) {
-      std::size_t g = 0;
-      for (int k = U - 1; k >= 0; --k)
-        g = g * std::size_t(cells[k]) + std::size_t(at[k]);
+    for_each_box<U>(a, b, cells, [&](std::size_t g) {
       visit(g);
-      int k = 0;
-      while (k < U && at[k] == b[k])
-        at[k] = a[k], ++k;
-      if (k == U)
-        break;
-      ++at[k];
-    }
+      return true;
+    });
   };
   std::size_t entries = 0;
   for (std::size_t f = 0; f < nb; ++f)
@@ -2152,7 +2167,7 @@ bool centroids_wound_once(const Mesh &mesh, const std::vector<VertexId> &bnd,
     const double widen = 1e-9 * reach;
     std::size_t marks = 0;
     for (std::size_t f = 0; f < nb; ++f) {
-      std::int64_t a[Dim], b[Dim], at[Dim];
+      std::int64_t a[Dim], b[Dim];
       for (int k = 0; k < Dim; ++k) {
         double l = 1e300, h = -1e300;
         for (int j = 0; j < Dim; ++j) {
@@ -2160,23 +2175,16 @@ bool centroids_wound_once(const Mesh &mesh, const std::vector<VertexId> &bnd,
           l = std::min(l, x);
           h = std::max(h, x);
         }
-        a[k] = at[k] = gindex(l - widen, k);
+        a[k] = gindex(l - widen, k);
         b[k] = gindex(h + widen, k);
       }
-      while (true) {
-        std::size_t g = 0;
-        for (int k = Dim - 1; k >= 0; --k)
-          g = g * std::size_t(gn[k]) + std::size_t(at[k]);
+      bool fits = true;
+      for_each_box<Dim>(a, b, gn, [&](std::size_t g) {
         region[g] = kMet;
-        if (++marks > (std::size_t(64) << 20))
-          return false; // facets far larger than the boxes: not worth it
-        int k = 0;
-        while (k < Dim && at[k] == b[k])
-          at[k] = a[k], ++k;
-        if (k == Dim)
-          break;
-        ++at[k];
-      }
+        return fits = ++marks <= (std::size_t(64) << 20);
+      });
+      if (!fits)
+        return false; // facets far larger than the boxes: not worth it
     }
   }
   // The regions: numbered from 1 by a flood over face neighbours.

@@ -835,6 +835,17 @@ CellId add_scaled_copy(Mesh &m, const std::vector<double> &where, double scale) 
   return CellId(m.num_cells() - 1);
 }
 
+// Case k of the cells laid over a mesh: a copy of the cell nearest a point
+// spread over the mesh, scaled by one of four factors (returned).
+double lay_cell_over(Mesh &m, int k) {
+  std::vector<double> where(static_cast<std::size_t>(m.dim));
+  for (int d = 0; d < m.dim; ++d)
+    where[std::size_t(d)] = 0.05 + 0.9 * std::fmod(0.37 * (k + 1) * (d + 2), 1.0);
+  const double scale = std::array{0.3, 0.9, 2.37, 5.3}[std::size_t(k % 4)];
+  add_scaled_copy(m, where, scale);
+  return scale;
+}
+
 // prepare_input's message when the only cells overlapping others are
 // `extras`: the pair (cell, other) with the smallest cell, then the
 // smallest other, whose other's centroid lies strictly inside the cell.
@@ -915,12 +926,8 @@ TEST_CASE("overlap: the search by groups finds what each cell's own search finds
   int found = 0;
   for (int k = 0; k < 12; ++k) {
     Mesh bad = m;
-    std::vector<double> where(static_cast<std::size_t>(dim));
-    for (int d = 0; d < dim; ++d)
-      where[std::size_t(d)] = 0.05 + 0.9 * std::fmod(0.37 * (k + 1) * (d + 2), 1.0);
-    const double scale = std::array{0.3, 0.9, 2.37, 5.3}[std::size_t(k % 4)];
-    const CellId extra = add_scaled_copy(bad, where, scale);
-    const std::string expected = expected_overlap(bad, {extra}, "t.vtu");
+    const double scale = lay_cell_over(bad, k);
+    const std::string expected = expected_overlap(bad, {CellId(bad.num_cells() - 1)}, "t.vtu");
     found += expected != "no error";
     INFO("case " << k << ", scale " << scale);
     for (bool own : {false, true})
@@ -1035,12 +1042,8 @@ TEST_CASE("overlap fast path: where a centroid lies in two cells the count is no
   int found = 0;
   for (int k = 0; k < 8; ++k) {
     Mesh bad = m;
-    std::vector<double> where(static_cast<std::size_t>(dim));
-    for (int d = 0; d < dim; ++d)
-      where[std::size_t(d)] = 0.05 + 0.9 * std::fmod(0.37 * (k + 1) * (d + 2), 1.0);
-    const double scale = std::array{0.3, 0.9, 2.37, 5.3}[std::size_t(k % 4)];
-    const CellId extra = add_scaled_copy(bad, where, scale);
-    const std::string expected = expected_overlap(bad, {extra}, "t.vtu");
+    const double scale = lay_cell_over(bad, k);
+    const std::string expected = expected_overlap(bad, {CellId(bad.num_cells() - 1)}, "t.vtu");
     INFO("dim " << dim << ", case " << k << ", scale " << scale);
     const auto [message, fast] = prepare_fast(bad);
     CHECK(message == expected);
