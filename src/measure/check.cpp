@@ -1836,30 +1836,17 @@ inline void sort_by_key(std::vector<std::uint64_t> &keys, std::vector<CellId> &i
 constexpr double kSlope[3] = {0.2971832417, 0.1852213817, 0.1127915737};
 constexpr double kSure = 1e-11;
 
-// det of the K x K matrix with columns a[0..K-1] (each K values).
+// det of the K x K matrix with columns a[0..K-1] (each K values; the
+// transpose's, geometry::determinant's rows, is the same).
 template <int K> double det_columns(const double (*a)[4]) {
-  if constexpr (K == 1)
+  if constexpr (K == 1) {
     return a[0][0];
-  else if constexpr (K == 2)
-    return a[0][0] * a[1][1] - a[1][0] * a[0][1];
-  else if constexpr (K == 3)
-    return a[0][0] * (a[1][1] * a[2][2] - a[2][1] * a[1][2]) -
-           a[1][0] * (a[0][1] * a[2][2] - a[2][1] * a[0][2]) +
-           a[2][0] * (a[0][1] * a[1][2] - a[1][1] * a[0][2]);
-  else {
-    // along the first row: minors of rows 1..3
-    double sum = 0, sign = 1;
-    for (int c = 0; c < 4; ++c, sign = -sign) {
-      double m[3][4];
-      for (int j = 0, k = 0; j < 4; ++j)
-        if (j != c) {
-          for (int r = 0; r < 3; ++r)
-            m[k][r] = a[j][r + 1];
-          ++k;
-        }
-      sum += sign * a[c][0] * det_columns<3>(m);
-    }
-    return sum;
+  } else {
+    std::array<double, K * K> m;
+    for (int j = 0; j < K; ++j)
+      for (int r = 0; r < K; ++r)
+        m[std::size_t(j * K + r)] = a[j][r];
+    return geometry::determinant<K>(m);
   }
 }
 
@@ -2048,13 +2035,11 @@ bool centroids_wound_once(const Mesh &mesh, const std::vector<VertexId> &bnd,
       each_cell(f, [&](std::size_t g) { listed[at[g]++] = std::uint32_t(f); });
   }
 
-  // The count along the ray from y (sheared), kUnsure when not sure. D_i is
-  // sure when it exceeds kSure times the sum of its terms' sizes plus what
-  // the rounding of v can change.
+  // What facet f adds to the count along the ray from y (sheared): +1, -1
+  // or 0, kUnsure when not sure. D_i is sure when it exceeds kSure times the
+  // sum of its terms' sizes plus what the rounding of v can change.
   constexpr int kUnsure = std::numeric_limits<int>::min();
-  // What facet f adds to the count from y (sheared) where the ray meets it
-  // before t = until (+1, -1 or 0), kUnsure when not sure.
-  auto cross = [&](std::size_t f, const double *y, double until) {
+  auto cross = [&](std::size_t f, const double *y) {
     const double *box = &fbox[f * 2 * U];
     bool in = true;
     for (int k = 0; k < U; ++k)
@@ -2085,28 +2070,18 @@ bool centroids_wound_once(const Mesh &mesh, const std::vector<VertexId> &bnd,
     }
     if (unsure || side[f] == 0)
       return kUnsure;
-    // The meeting point's t against t0: the sign of sum_i d_i (t_i - t0)
-    // over that of sum d, sure or not.
-    auto after = [&](double t0) {
-      double ahead = 0, bound = 0, weight = 0;
-      for (int i = 0; i < Dim; ++i) {
-        const double dt = ft[f * Dim + std::size_t(i)] - t0;
-        ahead += d[i] * dt;
-        bound += std::abs(d[i] * dt);
-        weight += std::abs(d[i]);
-      }
-      if (!(std::abs(ahead) > kSure * bound + weight * tround))
-        return kUnsure;
-      return (ahead > 0) == (sum > 0) ? 1 : 0;
-    };
-    const int past_y = after(y[0]);
-    if (past_y != 1)
-      return past_y; // behind y, or not sure
-    if (until < 1e300) {
-      const int past_end = after(until);
-      if (past_end != 0)
-        return past_end == 1 ? 0 : kUnsure; // beyond the end
+    // Ahead of y: the sign of sum_i d_i (t_i - t(y)) is that of sum d.
+    double ahead = 0, bound = 0, weight = 0;
+    for (int i = 0; i < Dim; ++i) {
+      const double dt = ft[f * Dim + std::size_t(i)] - y[0];
+      ahead += d[i] * dt;
+      bound += std::abs(d[i] * dt);
+      weight += std::abs(d[i]);
     }
+    if (!(std::abs(ahead) > kSure * bound + weight * tround))
+      return kUnsure;
+    if ((ahead > 0) != (sum > 0))
+      return 0; // behind y
     const int before = (Dim % 2 ? -1 : 1) * (sum > 0 ? 1 : -1);
     return before == side[f] ? 1 : -1;
   };
@@ -2119,7 +2094,7 @@ bool centroids_wound_once(const Mesh &mesh, const std::vector<VertexId> &bnd,
       g = g * std::size_t(cells[k]) + std::size_t(index(y[k + 1], k));
     }
     for (std::uint32_t e = start[g]; e < start[g + 1]; ++e) {
-      const int c = cross(listed[e], y, 1e300);
+      const int c = cross(listed[e], y);
       if (c == kUnsure)
         return kUnsure;
       count += c;
