@@ -21,6 +21,7 @@
 #include "io/vtu_read.hpp"
 
 #include "bisect/mesh.hpp"
+#include "bisect/threads.hpp"
 
 #include <lz4.h>
 #include <lzma.h>
@@ -35,6 +36,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <set>
@@ -1041,16 +1044,73 @@ private:
     if (expected != kAnyCount && n != expected)
       src.fail("holds " + str(n) + " values (" + str(bytes) + " bytes), expected " + str(expected));
     std::vector<D> out(static_cast<std::size_t>(n));
-    payload.fill(Converter<D>(a.type, f_.swap, out.data(), src), in_buf_, out_buf_);
+    // Block buffers (one block, or a chunk of base64, at a time), reused
+    // from block to block; per call, as arrays are read in parallel.
+    std::vector<unsigned char> in_buf, out_buf;
+    payload.fill(Converter<D>(a.type, f_.swap, out.data(), src), in_buf, out_buf);
     return out;
   }
 
   const std::string &path_;
   const Document &doc_;
   const FileFormat &f_;
-  // Block buffers reused from array to array: fresh memory costs a page
-  // fault per page, a large part of the reading time.
-  mutable std::vector<unsigned char> in_buf_, out_buf_;
+};
+
+// The reading of a piece's arrays as steps run in parallel (each array is
+// decoded on its own), reported as if run one after the other: the first
+// step in that order that failed throws its error. plan() adds the steps
+// (its code may fail too, which ends the plan there); run() runs them all,
+// with `between(i)` called in order before step i's error is looked at (for
+// checks that need the earlier steps' results).
+class ParallelSteps {
+public:
+  void add(std::function<void()> step, std::uint64_t cost) {
+    steps_.push_back(std::move(step));
+    costs_.push_back(cost);
+  }
+  std::size_t size() const { return steps_.size(); }
+
+  template <class F> void plan(F &&f) {
+    try {
+      f();
+    } catch (...) {
+      plan_error_ = std::current_exception();
+      plan_error_at_ = steps_.size();
+    }
+  }
+
+  template <class Between> void run(Between &&between) {
+    const std::size_t n = steps_.size();
+    std::vector<std::exception_ptr> errors(n);
+    // Largest first, so that the last one to start is a small one.
+    std::vector<std::size_t> order(n);
+    for (std::size_t i = 0; i < n; ++i)
+      order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return costs_[a] > costs_[b]; });
+    const int workers = int(std::clamp<std::size_t>(n, 1, std::size_t(threads())));
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
+    for (std::size_t k = 0; k < n; ++k) {
+      try {
+        steps_[order[k]]();
+      } catch (...) {
+        errors[order[k]] = std::current_exception();
+      }
+    }
+    for (std::size_t i = 0; i <= n; ++i) {
+      between(i);
+      if (plan_error_ && plan_error_at_ == i)
+        std::rethrow_exception(plan_error_);
+      if (i < n && errors[i])
+        std::rethrow_exception(errors[i]);
+    }
+  }
+
+private:
+  std::vector<std::function<void()>> steps_;
+  std::vector<std::uint64_t> costs_;
+  std::exception_ptr plan_error_;
+  std::size_t plan_error_at_ = 0;
 };
 
 // ---------------------------------------------------------------------------
@@ -1237,18 +1297,21 @@ private:
     return n > kAnyCount / 8192 ? kAnyCount - 1 : n * std::uint64_t(k); // never kAnyCount
   }
 
-  std::vector<Array> read_data(const Element *section, const std::string &what,
-                               const std::string &piece, std::uint64_t tuples) const {
-    std::vector<Array> out;
+  // Adds the reading of a section's arrays (into `out`, sized here) to `steps`.
+  void plan_data(ParallelSteps &steps, const Element *section, const std::string &what,
+                 const std::string &piece, std::uint64_t tuples, std::vector<Array> &out) const {
     if (!section)
-      return out;
-    for (const ArraySpec &a : specs(*section, what, piece)) {
-      Array arr{a.name, a.components, a.numeric, {}, std::string(info(a.type).name)};
+      return;
+    const std::vector<ArraySpec> all = specs(*section, what, piece);
+    out.reserve(all.size());
+    for (const ArraySpec &a : all) {
+      Array &arr = out.emplace_back(
+          Array{a.name, a.components, a.numeric, {}, std::string(info(a.type).name)});
       if (a.numeric)
-        arr.values = arrays_.read<double>(a, times(tuples, a.components));
-      out.push_back(std::move(arr));
+        steps.add([&arr, a, tuples,
+                   this] { arr.values = arrays_.read<double>(a, times(tuples, a.components)); },
+                  times(tuples, a.components));
     }
-    return out;
   }
 
   // Appends a later piece's arrays to the first piece's, which they must match.
@@ -1283,61 +1346,71 @@ private:
     if (np >= kNoVertex)
       fail(at + "too many points (" + str(np) + ")");
 
-    // Points first: their size checks NumberOfPoints against the file.
+    // The arrays are read in parallel (ParallelSteps); errors come in the
+    // order of the steps: Points first (their size checks NumberOfPoints
+    // against the file), the cells, their check, point data, cell data.
     std::vector<double> points;
-    const Element *pts = child(piece, "Points");
-    const Element *pts_array = nullptr;
-    if (pts)
-      for (std::size_t c : pts->children)
-        if (doc_.elements[c].name == "DataArray") {
-          pts_array = &doc_.elements[c];
-          break;
-        }
-    if (!pts_array && np > 0)
-      fail(at + "the piece is missing its Points");
-    if (pts_array) {
-      ArraySpec a = spec(*pts_array, at + "Points");
-      if (!a.numeric)
-        fail(at + "Points are not numeric");
-      if (a.components != 3)
-        fail(at + "Points have " + std::to_string(a.components) + " components, expected 3");
-      points = arrays_.read<double>(a, times(np, 3));
-    }
-
     std::vector<std::uint32_t> conn;
     std::vector<std::int64_t> offsets;
     std::vector<std::uint8_t> types;
     BadIds bad_ids;
-    if (const Element *cells = child(piece, "Cells")) {
-      const ArraySpec *sc = nullptr, *so = nullptr, *st = nullptr;
-      const std::vector<ArraySpec> cs = specs(*cells, "Cells", at);
-      for (const ArraySpec &a : cs) {
-        if (a.name == "connectivity")
-          sc = &a;
-        else if (a.name == "offsets")
-          so = &a;
-        else if (a.name == "types")
-          st = &a;
+    std::vector<Array> pd, cd;
+    ParallelSteps steps;
+    std::size_t check_at = std::size_t(-1);
+    const Element *pd_section = child(piece, "PointData"), *cd_section = child(piece, "CellData");
+    steps.plan([&] {
+      const Element *pts = child(piece, "Points");
+      const Element *pts_array = nullptr;
+      if (pts)
+        for (std::size_t c : pts->children)
+          if (doc_.elements[c].name == "DataArray") {
+            pts_array = &doc_.elements[c];
+            break;
+          }
+      if (!pts_array && np > 0)
+        fail(at + "the piece is missing its Points");
+      if (pts_array) {
+        ArraySpec a = spec(*pts_array, at + "Points");
+        if (!a.numeric)
+          fail(at + "Points are not numeric");
+        if (a.components != 3)
+          fail(at + "Points have " + std::to_string(a.components) + " components, expected 3");
+        steps.add([&, a] { points = arrays_.read<double>(a, times(np, 3)); }, 3 * np);
       }
-      if (nc > 0 && (!sc || !so || !st))
-        fail(at + "<Cells> has no '" +
-             (!sc   ? "connectivity"
-              : !so ? "offsets"
-                    : "types") +
-             "' array");
-      if (st)
-        types = arrays_.read<std::uint8_t>(*st, nc);
-      if (so)
-        offsets = arrays_.read<std::int64_t>(*so, nc);
-      if (sc)
-        conn = arrays_.read<std::uint32_t>(*sc, kAnyCount, &bad_ids);
-    } else if (nc > 0) {
-      fail(at + "the piece is missing its Cells");
-    }
-    check_cells(at, g.num_cells, np, conn, offsets, bad_ids);
-
-    std::vector<Array> pd = read_data(child(piece, "PointData"), "point data", at, np);
-    std::vector<Array> cd = read_data(child(piece, "CellData"), "cell data", at, nc);
+      if (const Element *cells = child(piece, "Cells")) {
+        std::optional<ArraySpec> sc, so, st;
+        for (const ArraySpec &a : specs(*cells, "Cells", at)) {
+          if (a.name == "connectivity")
+            sc = a;
+          else if (a.name == "offsets")
+            so = a;
+          else if (a.name == "types")
+            st = a;
+        }
+        if (nc > 0 && (!sc || !so || !st))
+          fail(at + "<Cells> has no '" +
+               (!sc   ? "connectivity"
+                : !so ? "offsets"
+                      : "types") +
+               "' array");
+        if (st)
+          steps.add([&, a = *st] { types = arrays_.read<std::uint8_t>(a, nc); }, nc);
+        if (so)
+          steps.add([&, a = *so] { offsets = arrays_.read<std::int64_t>(a, nc); }, nc);
+        if (sc)
+          steps.add([&, a = *sc] { conn = arrays_.read<std::uint32_t>(a, kAnyCount, &bad_ids); },
+                    4 * nc);
+      } else if (nc > 0) {
+        fail(at + "the piece is missing its Cells");
+      }
+      check_at = steps.size();
+      plan_data(steps, pd_section, "point data", at, np, pd);
+      plan_data(steps, cd_section, "cell data", at, nc, cd);
+    });
+    steps.run([&](std::size_t i) {
+      if (i == check_at)
+        check_cells(at, g.num_cells, np, conn, offsets, bad_ids);
+    });
 
     // Concatenate, point ids and offsets shifted past the earlier pieces.
     const auto point_base = std::uint32_t(g.num_points);

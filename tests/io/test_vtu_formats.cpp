@@ -3,6 +3,7 @@
 // type, id type and byte order, in 2D, 3D and 4D: read_vtu must give back
 // exactly the mesh that was written.
 #include "bisect/io.hpp"
+#include "bisect/threads.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -476,4 +477,39 @@ TEST_CASE("vtu formats: a corrupt lzma or zlib block is refused naming the array
     CHECK_THAT(read_error(text), Catch::Contains("Cells array 'connectivity': ") &&
                                      Catch::Contains(comp == 1 ? "zlib block" : "lzma block"));
   }
+}
+
+TEST_CASE("vtu formats: arrays read in parallel report the first error in file order", "[io]") {
+  // Each file has errors in two or more places; the reader reads the arrays
+  // on all threads but must report what a reading in order meets first:
+  // Points, the Cells arrays and their check, point data, cell data.
+  const std::string bad_m = "<DataArray type='Int32' Name='m' format='ascii'>x</DataArray>";
+  const std::string bad_p = "<DataArray type='Float64' Name='p' format='ascii'>1 y 3</DataArray>";
+  const std::string bad_q = "<DataArray type='Int33' Name='q' format='ascii'>1 2 3</DataArray>";
+  auto with = [](std::string text, const std::string &from, const std::string &to) {
+    const std::size_t at = text.find(from);
+    REQUIRE(at != std::string::npos);
+    return text.replace(at, from.size(), to);
+  };
+  const std::string plain = triangle_file(bad_p, bad_m);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {with(plain, "0 0 0 1 0 0", "0 0 z 1 0 0"), "Points: value 2 ('z')"},
+      {with(plain, ">5<", ">w<"), "Cells array 'types': value 0 ('w')"},
+      {with(plain, ">+3<", ">v<"), "Cells array 'offsets': value 0 ('v')"},
+      {with(plain, "0 1 2<", "0 1 7<"), "cell 0 refers to point 7, but there are 3 points"},
+      {with(plain, "Name='types'", "Name='typo'"), "<Cells> has no 'types' array"},
+      {plain, "point data array 'p': value 1 ('y')"},
+      {triangle_file(bad_q, bad_m), "point data array 'q' has unknown type 'Int33'"},
+      {triangle_file("", bad_q + bad_m), "cell data array 'q' has unknown type 'Int33'"},
+      {triangle_file("", bad_m + bad_q), "cell data array 'q' has unknown type 'Int33'"},
+      {triangle_file("", bad_m), "cell data array 'm': value 0 ('x')"},
+  };
+  for (int threads : {1, 2, 3}) {
+    set_threads(threads);
+    for (const auto &[text, message] : cases) {
+      INFO("threads " << threads << ", expecting " << message);
+      CHECK_THAT(read_error(text), Catch::Contains(message));
+    }
+  }
+  set_threads(0);
 }
