@@ -33,6 +33,7 @@
 #include "bisect/check.hpp"
 #include "bisect/io.hpp"
 #include "bisect/output.hpp"
+#include "io/file_bytes.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -182,20 +183,7 @@ bool is_space(char c) {
 
 class Source {
 public:
-  explicit Source(const std::string &path) : path_(path) {
-    std::FILE *file = std::fopen(path.c_str(), "rb");
-    if (!file)
-      throw InputError(path, std::string("cannot open: ") + std::strerror(errno));
-    char chunk[1 << 16];
-    std::size_t got;
-    while ((got = std::fread(chunk, 1, sizeof chunk, file)) > 0)
-      text_.append(chunk, got);
-    const bool failed = std::ferror(file);
-    const int err = errno;
-    std::fclose(file);
-    if (failed)
-      throw InputError(path, std::string("cannot read: ") + std::strerror(err));
-  }
+  explicit Source(const std::string &path) : path_(path), file_(path), text_(file_.view()) {}
 
   bool binary = false; // decided by $MeshFormat
   bool swap = false;   // binary data in the other byte order
@@ -340,7 +328,7 @@ public:
   void skip_section(const std::string &name, std::size_t section_at) {
     const std::string marker = "$End" + name;
     std::size_t p = pos_;
-    while ((p = text_.find(marker, p)) != std::string::npos) {
+    while ((p = text_.find(marker, p)) != std::string_view::npos) {
       const bool starts_line = p == pos_ || text_[p - 1] == '\n' || text_[p - 1] == '\r';
       const std::size_t after = p + marker.size();
       const bool ends_word = after == text_.size() || is_space(text_[after]);
@@ -384,7 +372,8 @@ public:
 
 private:
   std::string path_;
-  std::string text_;
+  FileBytes file_;
+  std::string_view text_;
   std::size_t pos_ = 0;
   std::string_view last_;
 };
@@ -691,6 +680,24 @@ void add_element(Source &src, MshFile &f, std::uint64_t tag, long long type, con
   f.elements.push_back(ref);
 }
 
+// Room for `count` more elements of a block of type `et` (at most what the
+// rest of the file can hold, `bytes_each` per element at least): one
+// allocation per large block instead of a doubling copy of every array.
+void reserve_block(Source &src, MshFile &f, long long type, const ElementType &et,
+                   std::uint64_t count, std::uint64_t bytes_each) {
+  if (et.dim < 0 || et.dim > 3 || type != kSimplexType[et.dim])
+    return; // not kept by add_element
+  Simplices &s = f.simplices[et.dim];
+  const std::size_t need = s.size() + src.affordable(count, bytes_each);
+  if (need <= s.geom.capacity())
+    return;
+  const std::size_t room = std::max(need, 2 * s.geom.capacity());
+  s.nodes.reserve(room * std::size_t(et.nodes));
+  s.geom.reserve(room);
+  s.phys.reserve(room);
+  s.tag.reserve(room);
+}
+
 // The element type at `at`, which must be one this reader knows.
 ElementType known_type(Source &src, long long type, std::size_t at) {
   const ElementType et = element_type(type);
@@ -728,6 +735,7 @@ void read_elements22(Source &src, MshFile &f) {
                                " elements does not fit the " + std::to_string(total - done) +
                                " elements left of the " + std::to_string(total) + " announced");
       node_tags.resize(std::size_t(et.nodes));
+      reserve_block(src, f, type, et, count, 4 * (1 + ntags + std::uint64_t(et.nodes)));
       for (std::uint64_t i = 0; i < count; ++i) {
         const std::size_t at = src.pos();
         const std::uint64_t tag = src.raw_count("element tag");
@@ -792,6 +800,7 @@ void read_elements41(Source &src, MshFile &f) {
       src.fail(block_at, "element blocks hold more elements than the " + std::to_string(total) +
                              " announced");
     node_tags.resize(std::size_t(et.nodes));
+    reserve_block(src, f, type, et, count, src.binary ? sw * std::uint64_t(1 + et.nodes) : 4);
     for (std::uint64_t i = 0; i < count; ++i) {
       const std::size_t at = src.mark();
       const std::uint64_t tag = size41(src, "element tag");

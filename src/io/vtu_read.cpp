@@ -20,6 +20,8 @@
 // compressor's largest possible expansion of the compressed bytes present.
 #include "io/vtu_read.hpp"
 
+#include "io/file_bytes.hpp"
+
 #include "bisect/mesh.hpp"
 #include "bisect/threads.hpp"
 
@@ -1486,54 +1488,6 @@ Grid parse_grid(const std::string &path, const char *data, std::size_t size) {
   const Document doc = XmlParser(path, data, size).parse();
   return GridReader(path, doc).read();
 }
-
-namespace {
-
-// The file read into memory with read(2), not mapped: a file truncated by
-// another process while it is read would make a mapping raise SIGBUS; here
-// it is an InputError ("the file changed while it was read").
-class FileBytes {
-public:
-  explicit FileBytes(const std::string &path) {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
-      throw InputError(path, std::string("cannot open: ") + std::strerror(errno));
-    struct stat st;
-    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-      ::close(fd);
-      throw InputError(path, "not a regular file");
-    }
-    const std::size_t size = std::size_t(st.st_size);
-    try {
-      bytes_.resize(size);
-    } catch (...) {
-      ::close(fd);
-      throw;
-    }
-    std::size_t done = 0;
-    while (done < size) {
-      const ssize_t n =
-          ::read(fd, bytes_.data() + done, std::min<std::size_t>(size - done, 1u << 30));
-      if (n < 0 && errno == EINTR)
-        continue;
-      if (n <= 0) {
-        const int err = n < 0 ? errno : 0;
-        ::close(fd);
-        throw InputError(path, err ? std::string("cannot read: ") + std::strerror(err)
-                                   : "the file changed while it was read (it is shorter now)");
-      }
-      done += std::size_t(n);
-    }
-    ::close(fd);
-  }
-  const char *data() const { return bytes_.data(); }
-  std::size_t size() const { return bytes_.size(); }
-
-private:
-  std::vector<char> bytes_;
-};
-
-} // namespace
 
 Grid read_grid(const std::string &path) {
   const FileBytes file(path);

@@ -3299,7 +3299,21 @@ void for_each_interior_facet(const Mesh &mesh, const std::vector<std::array<Cell
         return i;
     return 0;
   };
-  for (const auto &[a, b] : piece) {
+  // The two cells of a facet lie anywhere in the cell arrays: their rows
+  // (and, when marked, their stage and tag, which visitors read) are
+  // fetched a few facets ahead, so that the cache misses overlap.
+  constexpr std::size_t kAhead = 12;
+  const bool marked = mesh.marked();
+  for (std::size_t k = 0; k < piece.size(); ++k) {
+    if (k + kAhead < piece.size())
+      for (CellId c : piece[k + kAhead]) {
+        __builtin_prefetch(mesh.cell(c));
+        if (marked) {
+          __builtin_prefetch(&mesh.stage[c]);
+          __builtin_prefetch(&mesh.tag[c]);
+        }
+      }
+    const auto [a, b] = piece[k];
     const VertexId *x = mesh.cell(a), *y = mesh.cell(b);
     if (!visit(a, opposite(x, y), b, opposite(y, x)))
       return;
