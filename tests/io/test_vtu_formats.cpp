@@ -4,6 +4,7 @@
 // exactly the mesh that was written.
 #include "bisect/io.hpp"
 #include "bisect/threads.hpp"
+#include "io/file_bytes.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -512,4 +513,26 @@ TEST_CASE("vtu formats: arrays read in parallel report the first error in file o
     }
   }
   set_threads(0);
+}
+
+TEST_CASE("file bytes: a file of several pieces reads whole on every thread count", "[io]") {
+  // 8 MiB pieces: 20 MiB and some bytes, every byte position-dependent.
+  const std::string path = temp_file("bytes.bin");
+  std::string text(std::size_t(20) << 20, '\0');
+  text.append("tail");
+  for (std::size_t i = 0; i < text.size() - 4; ++i)
+    text[i] = char((i * 2654435761u) >> 13);
+  write_text(path, text);
+  for (int threads : {1, 2, 3}) {
+    set_threads(threads);
+    const FileBytes bytes(path);
+    const bool same = bytes.view() == text; // not stringified by Catch: 20 MiB
+    CHECK(same);
+  }
+  set_threads(0);
+  write_text(path, "");
+  CHECK(FileBytes(path).size() == 0);
+  CHECK_THROWS_WITH(FileBytes(fs::path(path).parent_path().string()),
+                    Catch::Contains("not a regular file"));
+  CHECK_THROWS_WITH(FileBytes(path + ".missing"), Catch::Contains("cannot open"));
 }
