@@ -45,6 +45,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <set>
 #include <string>
@@ -183,7 +184,20 @@ bool is_space(char c) {
 
 class Source {
 public:
-  explicit Source(const std::string &path) : path_(path), file_(path), text_(file_.view()) {}
+  explicit Source(const std::string &path)
+      : path_(path), file_(std::make_unique<FileBytes>(path)), text_(file_->view()),
+        file_size_(text_.size()) {}
+
+  // Frees the file's bytes once everything is parsed, in binary files (whose
+  // messages name byte offsets, not lines): assembling the mesh then does
+  // not hold the whole file as well.
+  void drop_binary_text() {
+    if (!binary)
+      return;
+    text_ = {};
+    pos_ = 0;
+    file_.reset();
+  }
 
   bool binary = false; // decided by $MeshFormat
   bool swap = false;   // binary data in the other byte order
@@ -205,7 +219,7 @@ public:
 
   // "line N" (ASCII files) or "byte offset N" (binary files).
   std::string where(std::size_t at) const {
-    at = std::min(at, text_.size());
+    at = std::min(at, file_size_);
     if (binary)
       return "byte offset " + std::to_string(at);
     const auto newlines = std::count(text_.begin(), text_.begin() + std::ptrdiff_t(at), '\n');
@@ -372,8 +386,9 @@ public:
 
 private:
   std::string path_;
-  FileBytes file_;
+  std::unique_ptr<FileBytes> file_;
   std::string_view text_;
+  std::size_t file_size_;
   std::size_t pos_ = 0;
   std::string_view last_;
 };
@@ -1088,10 +1103,17 @@ DataArray cell_array(Source &src, const MshFile &f, const DataBlock &b, int dim)
   const std::size_t ncells = f.simplices[dim].size();
   DataArray a{b.name, b.components, std::vector<double>(ncells * nc, 0.0)};
   std::vector<char> covered(ncells, 0);
+  // Data usually lists the elements in tag order: the element after the
+  // last one found is tried before a binary search.
+  auto next = f.elements.begin();
   for (std::size_t i = 0; i < b.tags.size(); ++i) {
     const auto it =
-        std::lower_bound(f.elements.begin(), f.elements.end(), b.tags[i],
-                         [](const ElementRef &e, std::uint64_t t) { return e.tag < t; });
+        next != f.elements.end() && next->tag == b.tags[i]
+            ? next
+            : std::lower_bound(f.elements.begin(), f.elements.end(), b.tags[i],
+                               [](const ElementRef &e, std::uint64_t t) { return e.tag < t; });
+    if (it != f.elements.end())
+      next = it + 1;
     if (it == f.elements.end() || it->tag != b.tags[i])
       src.fail(b.at, "element data " + quoted(b.name) + " refers to element " +
                          std::to_string(b.tags[i]) + ", which is not in $Elements");
@@ -1220,11 +1242,13 @@ Mesh assemble(Source &src, MshFile &f) {
   for (std::uint32_t p : s.nodes)
     m.cells.push_back(vertex_of[p]);
   add_gmsh_tags(f, dim, m);
-  for (const DataBlock &b : f.data) {
+  for (DataBlock &b : f.data) {
     if (b.on_nodes)
       m.point_data.push_back(node_array(src, f, b, vertex_of, nv));
     else
       m.cell_data.push_back(cell_array(src, f, b, dim));
+    b.tags = {}; // done with: the file's copy need not outlive it
+    b.values = {};
   }
   // Cells in element tag order (f.elements is sorted by tag): a file whose
   // blocks group the elements by entity, as Gmsh and our writer make them,
@@ -1632,6 +1656,7 @@ void write_element_data(Output &out, const DataArray &a, const std::vector<Simpl
 Mesh read_msh(const std::string &path) {
   Source src(path);
   MshFile f = parse(src);
+  src.drop_binary_text();
   return assemble(src, f);
 }
 
