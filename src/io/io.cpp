@@ -51,7 +51,8 @@ void check_readable_file(const std::string &path) {
   if (fs::is_directory(st))
     throw InputError(path, "is a directory");
   if (!fs::is_regular_file(st))
-    throw InputError(path, "not a regular file");
+    throw InputError(path, "not a regular file (to read a mesh from a pipe, give - as the input "
+                           "and send it on standard input)");
   std::FILE *f = std::fopen(path.c_str(), "rb");
   if (!f)
     throw InputError(path, std::string("cannot open: ") + std::strerror(errno));

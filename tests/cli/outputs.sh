@@ -130,6 +130,10 @@ expect_exit 1 timeout 5 "$BISECT" refine "$S" --region region.fifo -o r.vtu
 one_line_naming "region.fifo: not a regular file"
 expect_exit 1 timeout 5 "$BISECT" refine "$S" --region /dev/zero -o r.vtu
 one_line_naming "/dev/zero: not a regular file"
+# A mesh from a pipe: refused by name, with the way that works (-).
+mkfifo mesh.fifo
+expect_exit 1 timeout 5 "$BISECT" info mesh.fifo
+one_line_naming "mesh.fifo: not a regular file (to read a mesh from a pipe, give - as the input"
 truncate -s 65M huge.json
 expect_exit 1 B refine "$S" --region huge.json -o r.vtu
 one_line_naming "huge.json: larger than 64 MiB"
