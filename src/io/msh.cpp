@@ -417,7 +417,7 @@ struct Nodes {
 struct Simplices {
   std::vector<std::uint32_t> nodes; // dim+1 node indices (into Nodes) each
   std::vector<long long> geom;      // elementary entity tag
-  std::vector<long long> phys;      // physical tag (2.2 files)
+  std::vector<long long> phys;      // physical tag (2.2 files only; 4.1: empty)
   std::vector<std::uint64_t> tag;   // element tag (to name it in errors)
   std::size_t size() const { return geom.size(); }
 };
@@ -673,7 +673,8 @@ void add_element(Source &src, MshFile &f, std::uint64_t tag, long long type, con
     ref.index = std::uint32_t(s.size());
     s.nodes.insert(s.nodes.end(), idx, idx + et.nodes);
     s.geom.push_back(geom);
-    s.phys.push_back(phys);
+    if (f.version == 22) // 4.1 files have their physical tags by entity
+      s.phys.push_back(phys);
     s.tag.push_back(tag);
     if (type == kTriangle && f.off_plane_at == kNone)
       for (int k = 0; k < 3; ++k) {
@@ -709,7 +710,8 @@ void reserve_block(Source &src, MshFile &f, long long type, const ElementType &e
   const std::size_t room = std::max(need, 2 * s.geom.capacity());
   s.nodes.reserve(room * std::size_t(et.nodes));
   s.geom.reserve(room);
-  s.phys.reserve(room);
+  if (f.version == 22)
+    s.phys.reserve(room);
   s.tag.reserve(room);
 }
 
@@ -1060,9 +1062,14 @@ void add_gmsh_tags(const MshFile &f, int dim, Mesh &m) {
     if (!f.have_entities)
       return;
     phys.values.reserve(s.size());
+    // Cells come in blocks of one entity: the map is asked once a run.
+    long long last_geom = 0, p = 0;
     for (std::size_t c = 0; c < s.size(); ++c) {
-      const auto it = f.first_physical.find({dim, s.geom[c]});
-      const long long p = it == f.first_physical.end() ? 0 : it->second;
+      if (c == 0 || s.geom[c] != last_geom) {
+        last_geom = s.geom[c];
+        const auto it = f.first_physical.find({dim, last_geom});
+        p = it == f.first_physical.end() ? 0 : it->second;
+      }
       any_phys |= p != 0;
       phys.values.push_back(double(p));
     }
