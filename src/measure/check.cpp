@@ -1475,6 +1475,34 @@ long long euler_characteristic(const Mesh &mesh, std::size_t facets,
   return chi;
 }
 
+// Calls visit(at) for every box `at` (K indices) of a K-dimensional grid
+// from corner a to corner b, the first index fastest; stops when visit
+// returns false.
+template <int K, class Visit>
+void for_each_box(const std::int64_t *a, const std::int64_t *b, Visit &&visit) {
+  std::int64_t at[K];
+  std::copy(a, a + K, at);
+  while (true) {
+    if (!visit(static_cast<const std::int64_t *>(at)))
+      return;
+    int k = 0;
+    while (k < K && at[k] == b[k])
+      at[k] = a[k], ++k;
+    if (k == K)
+      return;
+    ++at[k];
+  }
+}
+
+// The number of box `at` in a grid of n[k] boxes a side, the first index
+// fastest.
+template <int K> std::size_t box_number(const std::int64_t *at, const std::int64_t *n) {
+  std::size_t g = 0;
+  for (int k = K - 1; k >= 0; --k)
+    g = g * std::size_t(n[k]) + std::size_t(at[k]);
+  return g;
+}
+
 // Hanging nodes: a vertex lying on the closed boundary facet it does not
 // belong to. In a conforming mesh the only vertices on a closed facet are its
 // own (cells meet in common faces); a non-conforming interface shows up as
@@ -1615,21 +1643,19 @@ std::string find_hanging_node(const Mesh &mesh, const std::vector<VertexId> &bnd
             return report(g.second);
         continue;
       }
-      std::int64_t idx[Dim];
-      std::copy(ilo, ilo + Dim, idx);
-      for (;;) {
+      std::size_t found = std::size_t(-1);
+      for_each_box<Dim>(ilo, ihi, [&](const std::int64_t *idx) {
         const std::uint64_t k = key_of(idx);
         auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(k, std::size_t(0)));
         for (; it != grid.end() && it->first == k; ++it)
-          if (test(it->second))
-            return report(it->second);
-        int d = 0;
-        while (d < Dim && idx[d] == ihi[d])
-          idx[d] = ilo[d], ++d;
-        if (d == Dim)
-          break;
-        ++idx[d];
-      }
+          if (test(it->second)) {
+            found = it->second;
+            return false;
+          }
+        return true;
+      });
+      if (found != std::size_t(-1))
+        return report(found);
     }
   }
   return {};
@@ -1857,29 +1883,6 @@ template <int K> double column_length(const double *a) {
   return std::sqrt(s);
 }
 
-// Calls visit(g) for every box g of a K-dimensional grid of n[k] boxes a
-// side (g numbered with the first coordinate fastest) from corner a to
-// corner b; stops when visit returns false.
-template <int K, class Visit>
-void for_each_box(const std::int64_t *a, const std::int64_t *b, const std::int64_t *n,
-                  Visit &&visit) {
-  std::int64_t at[K];
-  std::copy(a, a + K, at);
-  while (true) {
-    std::size_t g = 0;
-    for (int k = K - 1; k >= 0; --k)
-      g = g * std::size_t(n[k]) + std::size_t(at[k]);
-    if (!visit(g))
-      return;
-    int k = 0;
-    while (k < K && at[k] == b[k])
-      at[k] = a[k], ++k;
-    if (k == K)
-      return;
-    ++at[k];
-  }
-}
-
 template <int Dim> void shear(const double *x, double *z) {
   z[0] = x[0];
   for (int k = 0; k + 1 < Dim; ++k)
@@ -2016,8 +2019,8 @@ bool centroids_wound_once(const Mesh &mesh, const std::vector<VertexId> &bnd,
       a[k] = index(box[k], k);
       b[k] = index(box[U + k], k);
     }
-    for_each_box<U>(a, b, cells, [&](std::size_t g) {
-      visit(g);
+    for_each_box<U>(a, b, [&](const std::int64_t *at) {
+      visit(box_number<U>(at, cells));
       return true;
     });
   };
@@ -2154,8 +2157,8 @@ bool centroids_wound_once(const Mesh &mesh, const std::vector<VertexId> &bnd,
         b[k] = gindex(h + widen, k);
       }
       bool fits = true;
-      for_each_box<Dim>(a, b, gn, [&](std::size_t g) {
-        region[g] = kMet;
+      for_each_box<Dim>(a, b, [&](const std::int64_t *at) {
+        region[box_number<Dim>(at, gn)] = kMet;
         return fits = ++marks <= (std::size_t(64) << 20);
       });
       if (!fits)
