@@ -1419,6 +1419,7 @@ private:
     const auto conn_base = std::int64_t(g.connectivity.size());
     if (index == 0)
       g.offsets.push_back(0);
+    g.offsets.reserve(g.offsets.size() + offsets.size());
     for (std::int64_t o : offsets)
       g.offsets.push_back(o + conn_base);
     if (point_base == 0) {
@@ -1455,18 +1456,18 @@ private:
     const auto size = std::int64_t(conn.size());
     for (std::size_t c = 0; c < offsets.size(); ++c) {
       const std::int64_t end = offsets[c];
-      const std::string cell = "cell " + str(first_cell + c);
+      auto cell_name = [&] { return "cell " + str(first_cell + c); };
       if (end < start)
-        fail(at + "Cells array 'offsets': " + cell + " ends at " + std::to_string(end) +
+        fail(at + "Cells array 'offsets': " + cell_name() + " ends at " + std::to_string(end) +
              ", before it starts at " + std::to_string(start) +
              " (offsets must be monotonically increasing)");
       if (end > size)
-        fail(at + "Cells array 'offsets': " + cell + " ends at " + std::to_string(end) +
+        fail(at + "Cells array 'offsets': " + cell_name() + " ends at " + std::to_string(end) +
              ", past the end of the connectivity (" + std::to_string(size) + " ids)");
       for (std::int64_t k = start; k < end; ++k)
         if (conn[std::size_t(k)] >= np) {
           const std::uint32_t id = conn[std::size_t(k)];
-          fail(at + cell + " refers to point " + (id == kBadId ? bad.first : str(id)) +
+          fail(at + cell_name() + " refers to point " + (id == kBadId ? bad.first : str(id)) +
                ", but there are " + str(np) + " points");
         }
       start = end;
