@@ -1451,7 +1451,7 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
 
 // V - E + F - ... over the vertices used by cells; `facets` is the number of
 // distinct facets (already known from facet_pass), `ridges` that of the
-// faces of Dim - 1 vertices when known (from find_fold's walk in 3D and 4D).
+// faces of Dim - 1 vertices when known (counted by find_fold in 3D and 4D).
 template <int Dim>
 long long euler_characteristic(const Mesh &mesh, std::size_t facets,
                                std::size_t ridges = std::size_t(-1)) {
@@ -3065,6 +3065,117 @@ std::string find_fold(const Mesh &mesh, std::size_t *faces = nullptr,
             break;
           }
         }
+    }
+    for (const std::string &s : found)
+      if (!s.empty())
+        return s;
+    return {};
+  } else if constexpr (Dim == 3) {
+    // The edges by their smaller end v, from v's star (the cells by vertex,
+    // a counting sort, in cell order): a thread marks each larger end w it
+    // meets in v's star with stamp[w] = v, so the distinct edges are counted
+    // and an edge's cells found without sorting all 6 edges of every cell.
+    // On a 5.4M-tet mesh, where all but 0.4% of the edges are skipped as
+    // wound once, that walk took 0.85-0.93 s (2 threads), this 0.55-0.6 s,
+    // in less memory (4 bytes per cell and vertex). The cells around an
+    // edge come in cell order, each one's other two vertices in its own
+    // order: what the walk handed to the same test.
+    constexpr int N = Dim + 1;
+    const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
+    std::vector<std::size_t> start(nv + 1, 0);
+    for (VertexId v : mesh.cells)
+      ++start[v + 1];
+    for (std::size_t v = 1; v <= nv; ++v)
+      start[v] += start[v - 1];
+    std::vector<CellId, UninitialisedAllocator<CellId>> star(mesh.cells.size());
+    {
+      // Each thread scans all cells and files those of its range of vertices.
+      const int parts = int(std::clamp<std::size_t>(nc >> 16, 1, std::size_t(threads())));
+      std::vector<std::size_t> cursor(start.begin(), start.end() - 1);
+#pragma omp parallel for num_threads(parts) schedule(static, 1)
+      for (int t = 0; t < parts; ++t) {
+        const VertexId lo = VertexId(nv * std::size_t(t) / std::size_t(parts)),
+                       hi = VertexId(nv * std::size_t(t + 1) / std::size_t(parts));
+        for (std::size_t c = 0; c < nc; ++c) {
+          const VertexId *cell = mesh.cell(CellId(c));
+          for (int i = 0; i < N; ++i)
+            if (cell[i] >= lo && cell[i] < hi)
+              star[cursor[cell[i]]++] = CellId(c);
+        }
+      }
+    }
+    // Blocks of vertices by all threads; the first finding in block order,
+    // which is key order.
+    constexpr std::size_t kBlock = std::size_t(1) << 12, kAhead = 16;
+    const std::size_t blocks = (nv + kBlock - 1) / kBlock;
+    std::vector<std::string> found(blocks);
+    std::vector<std::size_t> edges(blocks, 0);
+    const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
+#pragma omp parallel num_threads(workers)
+    {
+      StarAngles<Dim> angles(mesh);
+      AngleFinding f;
+      std::vector<VertexId> stamp(nv, kNoVertex), ends, extras;
+#pragma omp for schedule(dynamic, 1)
+      for (std::size_t k = 0; k < blocks; ++k)
+        for (std::size_t v = k * kBlock; v < std::min(nv, (k + 1) * kBlock); ++v) {
+          ends.clear();
+          const double *p = mesh.point(VertexId(v));
+          for (std::size_t s = start[v]; s < start[v + 1]; ++s) {
+            if (s + kAhead < star.size())
+              __builtin_prefetch(mesh.cell(star[s + kAhead]));
+            const VertexId *cell = mesh.cell(star[s]);
+            for (int i = 0; i < N; ++i) {
+              const VertexId w = cell[i];
+              if (w <= v || stamp[w] == VertexId(v))
+                continue;
+              stamp[w] = VertexId(v);
+              ++edges[k];
+              if (wound) {
+                // Where the count is surely 1 around the edge's midpoint,
+                // its cells go round it once.
+                const double *q = mesh.point(w);
+                double mid[Dim];
+                for (int d = 0; d < Dim; ++d)
+                  mid[d] = (0.0 + p[d] + q[d]) / 2;
+                if (wound->one_at(mid)) {
+                  if (g_skipped_faces) {
+                    std::lock_guard<std::mutex> lock(g_skipped_faces_mutex);
+                    g_skipped_faces->push_back({VertexId(v), w});
+                  }
+                  continue;
+                }
+              }
+              ends.push_back(w);
+            }
+          }
+          if (!found[k].empty())
+            continue;
+          std::sort(ends.begin(), ends.end());
+          for (VertexId w : ends) {
+            const std::array<VertexId, 2> key{VertexId(v), w};
+            extras.clear();
+            int count = 0;
+            for (std::size_t s = start[v]; s < start[v + 1]; ++s) {
+              const VertexId *cell = mesh.cell(star[s]);
+              if (std::find(cell, cell + N, w) == cell + N)
+                continue;
+              ++count;
+              for (int i = 0; i < N; ++i)
+                if (cell[i] != VertexId(v) && cell[i] != w)
+                  extras.push_back(cell[i]);
+            }
+            if (angles.tangled(key.data(), extras.data(), count, f)) {
+              found[k] = angle_message("edge " + id_list(mesh, key), f, Dim);
+              break;
+            }
+          }
+        }
+    }
+    if (faces) {
+      *faces = 0;
+      for (std::size_t n : edges)
+        *faces += n;
     }
     for (const std::string &s : found)
       if (!s.empty())
