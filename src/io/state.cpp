@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <string>
 
 namespace bisect {
@@ -253,7 +254,8 @@ bool decode_state(Mesh &mesh, const std::string &path,
   }
   mesh.stage.resize(nc);
   mesh.tag.resize(nc);
-  for (std::size_t c = 0; c < nc; ++c) {
+  // One cell's state: its stage, tag and vertex order.
+  auto decode_cell = [&](std::size_t c) {
     auto bad = [&](const std::string &what) {
       return InputError(path,
                         cell_name(mesh, CellId(c)) + ": invalid bisection state (" + what + ")");
@@ -299,7 +301,24 @@ bool decode_state(Mesh &mesh, const std::string &path,
     std::copy(x, x + nv, conn);
     for (int i = 0; i < nv; ++i)
       x[i] = conn[perm[i]];
-  }
+  };
+  // Blocks of cells by all threads; the first invalid cell in cell order is
+  // reported, as by one thread.
+  constexpr std::size_t kBlock = std::size_t(1) << 12;
+  const std::size_t blocks = (nc + kBlock - 1) / kBlock;
+  std::vector<std::exception_ptr> errors(blocks);
+  const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 4)
+  for (std::size_t k = 0; k < blocks; ++k)
+    try {
+      for (std::size_t c = k * kBlock; c < std::min(nc, (k + 1) * kBlock); ++c)
+        decode_cell(c);
+    } catch (...) {
+      errors[k] = std::current_exception();
+    }
+  for (const std::exception_ptr &e : errors)
+    if (e)
+      std::rethrow_exception(e);
   if (std::string why = check_state_consistency(mesh, interior); !why.empty())
     throw InputError(path, "the bisection state is inconsistent (" + why +
                                "): the file was not written by bisect as it is, or was altered "

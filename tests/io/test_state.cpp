@@ -166,6 +166,24 @@ TEST_CASE("state: values out of range are rejected, naming the cell", "[state][i
 // of one cell's connectivity swapped. Either the state is rejected as
 // inconsistent, or (when the tamper happens to keep it consistent) it refines
 // to a conforming mesh.
+TEST_CASE("state: decoded by several threads, the first invalid cell is named",
+          "[state][threads]") {
+  // 41,154 cells: ten blocks of the decoding, shared by the threads.
+  Mesh base = generate_kuhn(3, 19);
+  mark_mesh(base, Marking::Longest);
+  encode_state(base);
+  DataArray &state = array_named(base, kStateArray);
+  state.values[31000] = 3.5;
+  state.values[9000] = 24.0 * 16;
+  for (int threads : {1, 2, 3}) {
+    set_threads(threads);
+    Mesh m = base;
+    INFO(threads << " threads");
+    REQUIRE_THROWS_WITH(reload(m), Catch::StartsWith("in.vtu: cell 9000: invalid bisection state"));
+  }
+  set_threads(0);
+}
+
 TEST_CASE("state: tampered order or connectivity is rejected or still refines conformingly",
           "[state][2d][3d][4d]") {
   std::mt19937_64 rng(2024);
