@@ -25,9 +25,9 @@
 #include "bisect/mesh.hpp"
 #include "bisect/threads.hpp"
 
+#include <libdeflate.h>
 #include <lz4.h>
 #include <lzma.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <array>
@@ -41,6 +41,7 @@
 #include <exception>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <set>
 #include <string_view>
@@ -624,22 +625,29 @@ private:
   Base64 b64_;
 };
 
+struct FreeDecompressor {
+  void operator()(libdeflate_decompressor *d) const { libdeflate_free_decompressor(d); }
+};
+
 void decompress_block(ByteSource &src, Compressor c, const unsigned char *in, std::size_t in_size,
                       unsigned char *out, std::size_t out_size, std::uint64_t block) {
   const std::string which = "block " + str(block);
   switch (c) {
   case Compressor::Zlib: {
-    uLongf got = uLongf(out_size);
-    const int rc = uncompress(out, &got, in, uLong(in_size));
-    if (rc == Z_BUF_ERROR && got == out_size)
+    // libdeflate (whole blocks, which VTK writes): 0.44 s of CPU where zlib
+    // took 0.75 on a 5.4M-tet file.
+    thread_local const std::unique_ptr<libdeflate_decompressor, FreeDecompressor> inflater(
+        libdeflate_alloc_decompressor());
+    if (!inflater)
+      throw std::bad_alloc();
+    std::size_t got = 0;
+    const libdeflate_result rc =
+        libdeflate_zlib_decompress(inflater.get(), in, in_size, out, out_size, &got);
+    if (rc == LIBDEFLATE_INSUFFICIENT_SPACE)
       src.fail("zlib " + which + " holds more than the " + str(out_size) +
                " bytes its header says");
-    if (rc != Z_OK)
-      src.fail("zlib " + which + " is corrupt (" +
-               (rc == Z_DATA_ERROR  ? "data error"
-                : rc == Z_BUF_ERROR ? "incomplete data"
-                                    : "zlib error " + std::to_string(rc)) +
-               ")");
+    if (rc != LIBDEFLATE_SUCCESS)
+      src.fail("zlib " + which + " is corrupt");
     if (got != out_size)
       src.fail("zlib " + which + " holds " + str(got) + " bytes, its header says " + str(out_size));
     return;

@@ -572,6 +572,9 @@ bad("zlib-block-larger-than-header.vtu",
     zlib_vtu(cells=cell_data(zlib_array("Int32", "i", [4, 5, 6, 7], "material",
                                         header=(1, 8, 8, None)))),
     "holds more than the 8 bytes its header says")
+bad("zlib-block-shorter-than-header.vtu",
+    zlib_vtu(cells=cell_data(zlib_array("Int32", "i", [4], "material", header=(1, 8, 8, None)))),
+    "cell data array 'material': zlib block 0 holds 4 bytes, its header says 8")
 
 # Cells of unknown type, or with a number of ids their type does not have:
 # VTK 9.1 dropped them without a word (or crashed, with a bad point id).
