@@ -27,6 +27,12 @@ void set_walk_chunk_bytes(std::size_t bytes);
 // takes the wider packing it uses for larger meshes instead.
 void use_wide_final_walk(bool on);
 
+// In 3D the facet walk of validation and the checks packs a facet into 8
+// bytes (its cell without the facet's number) where the ids are narrow
+// enough (CellRefs, see Walk in check.cpp); with `on` false it always takes
+// the 16-byte packing, so a test can compare the two.
+void use_narrow_facet_walk(bool on);
+
 // The overlap search (find_overlap in check.cpp) reads a small grid per
 // group of cells; with `on`, every cell makes its own range search instead
 // (what a cell at a group's edge does), so a test can compare the two.

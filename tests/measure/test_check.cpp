@@ -1147,6 +1147,68 @@ TEST_CASE("input facts: validation's invariants and interior facets are those me
   set_threads(0);
 }
 
+TEST_CASE("facet walk: the narrow packing (8 bytes a facet) gives the wide one's facts, findings "
+          "and messages (3D)",
+          "[check][3d]") {
+  std::vector<Mesh> meshes{graded_kuhn(3, 4), read_mesh(testing::data_path("ball.msh"))};
+  // Broken copies of a Kuhn mesh, one vertex id changed in each: overlaps,
+  // facets of three cells, flat cells.
+  const Mesh kuhn = generate_kuhn(3, 3);
+  for (std::size_t c = 0; c < kuhn.num_cells(); c += 7) {
+    Mesh m = kuhn;
+    m.cell(CellId(c))[c % 4] = VertexId((c * 7 + 3) % kuhn.num_vertices());
+    meshes.push_back(m);
+  }
+  struct Seen {
+    std::string message;
+    bool fast = false;
+    Invariants facts, measured;
+    InteriorFacets interior;
+    std::string check;
+  };
+  auto run = [](const Mesh &m, bool narrow) {
+    testing::use_narrow_facet_walk(narrow);
+    Seen s;
+    Mesh copy = m;
+    InputFacts facts;
+    facts.want_interior = true;
+    try {
+      prepare_input(copy, "t.vtu", {}, &facts);
+      s.message = "no error";
+    } catch (const InputError &e) {
+      s.message = e.what();
+    }
+    s.fast = testing::overlap_fast_path_taken();
+    s.facts = facts.invariants;
+    s.interior = facts.interior;
+    s.measured = measure_invariants(m);
+    s.check = check_conformity(m).failure;
+    testing::use_narrow_facet_walk(true);
+    return s;
+  };
+  int errors = 0;
+  for (std::size_t chunk : {std::size_t(0), std::size_t(1) << 12}) // several chunks too
+    for (const Mesh &m : meshes) {
+      testing::set_walk_chunk_bytes(chunk);
+      const Seen narrow = run(m, true), wide = run(m, false);
+      testing::set_walk_chunk_bytes(0);
+      INFO(m.num_cells() << " cells, chunk budget " << chunk << ": " << wide.message);
+      CHECK(narrow.message == wide.message);
+      CHECK(narrow.fast == wide.fast);
+      CHECK(narrow.facts.volume == wide.facts.volume);
+      CHECK(narrow.facts.boundary_measure == wide.facts.boundary_measure);
+      CHECK(narrow.facts.boundary_facets == wide.facts.boundary_facets);
+      CHECK(narrow.facts.euler == wide.facts.euler);
+      CHECK(narrow.interior == wide.interior);
+      CHECK(narrow.measured.boundary_measure == wide.measured.boundary_measure);
+      CHECK(narrow.measured.boundary_facets == wide.measured.boundary_facets);
+      CHECK(narrow.measured.euler == wide.measured.euler);
+      CHECK(narrow.check == wide.check);
+      errors += wide.message != "no error";
+    }
+  CHECK(errors >= 10);
+}
+
 TEST_CASE("final check: cell facts taken with the quality give the same quality and verdicts, "
           "and are used only for the mesh they describe",
           "[check][2d][3d][4d]") {
