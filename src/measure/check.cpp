@@ -155,12 +155,16 @@ bool g_narrow_facet_walk = true;
 // An allocator whose resize() leaves new elements uninitialised (for trivial
 // types): the walk's buffer is written in full before it is read, and
 // zero-filling ~100 MB per walk was a tenth of `bisect info`'s time. Large
-// blocks are mapped with their pages populated at once (MAP_POPULATE, or in
-// parallel pieces when there are threads): the kernel fills them in one call
-// instead of one fault per page. Transparent huge pages (MADV_HUGEPAGE) were
-// as fast at best, but where the kernel had to compact memory first, the
-// final check's first scan took 0.2-0.3 s instead of 0.05 (4D, 5.2 M
-// pentatopes, 144 MB).
+// blocks are mapped on transparent huge pages where the kernel allows them
+// (MADV_HUGEPAGE), their pages populated at once by all threads, a piece
+// each (MADV_POPULATE_WRITE). On the virtual machines this project runs on,
+// the first touch of each 4 KiB page costs a trip to the hypervisor even
+// after populating: touching 256 MB populated in 4 KiB pages took 0.32 s,
+// in 2 MiB pages 0.01 s. With huge pages `bisect info` of a 5.4M-tet file
+// took 2.46-2.56 s instead of 2.59-3.08 (26k page faults instead of 71k), of
+// a 5.2M-pentatope one 6.0-6.2 s instead of 6.5-7.0. (An earlier trial on
+// another machine saw the kernel compact memory first, and a 144 MB
+// buffer's first scan take 0.2-0.3 s instead of 0.05.)
 template <class T> struct UninitialisedAllocator : std::allocator<T> {
   template <class U> struct rebind { using other = UninitialisedAllocator<U>; };
   UninitialisedAllocator() = default;
@@ -175,25 +179,22 @@ template <class T> struct UninitialisedAllocator : std::allocator<T> {
       return std::allocator<T>::allocate(n);
     const std::size_t len = mapped_bytes(n);
     const int workers = int(std::clamp<std::size_t>(len / kLarge, 1, std::size_t(threads())));
-    void *p = mmap(nullptr, len, PROT_READ | PROT_WRITE,
-                   MAP_PRIVATE | MAP_ANONYMOUS | (workers == 1 ? MAP_POPULATE : 0), -1, 0);
+    void *p = mmap(nullptr, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (p == MAP_FAILED)
       throw std::bad_alloc();
-    if (workers > 1) {
-      // Populated by all threads, a piece each (the kernel clears the pages
-      // in the thread that asks); page by page where the kernel has no
-      // MADV_POPULATE_WRITE (before Linux 5.14).
-      constexpr int kPopulateWrite = 23; // MADV_POPULATE_WRITE
-      constexpr std::size_t kPiece = std::size_t(2) << 20;
-      const std::size_t pieces = (len + kPiece - 1) / kPiece;
-      char *const base = static_cast<char *>(p);
+    madvise(p, len, MADV_HUGEPAGE); // a hint: nothing changes where the kernel refuses
+    // The kernel clears the pages in the thread that asks; page by page
+    // where it has no MADV_POPULATE_WRITE (before Linux 5.14).
+    constexpr int kPopulateWrite = 23; // MADV_POPULATE_WRITE
+    constexpr std::size_t kPiece = std::size_t(2) << 20;
+    const std::size_t pieces = (len + kPiece - 1) / kPiece;
+    char *const base = static_cast<char *>(p);
 #pragma omp parallel for num_threads(workers) schedule(static)
-      for (std::size_t k = 0; k < pieces; ++k) {
-        const std::size_t size = std::min(kPiece, len - k * kPiece);
-        if (madvise(base + k * kPiece, size, kPopulateWrite) != 0)
-          for (std::size_t at = 0; at < size; at += 4096)
-            static_cast<volatile char *>(base)[k * kPiece + at] = 0;
-      }
+    for (std::size_t k = 0; k < pieces; ++k) {
+      const std::size_t size = std::min(kPiece, len - k * kPiece);
+      if (madvise(base + k * kPiece, size, kPopulateWrite) != 0)
+        for (std::size_t at = 0; at < size; at += 4096)
+          static_cast<volatile char *>(base)[k * kPiece + at] = 0;
     }
     return static_cast<T *>(p);
   }
@@ -356,8 +357,9 @@ struct Walk {
   static bool fits(std::size_t nv, std::size_t nc) {
     if (nv >= (std::size_t(1) << kIdBits))
       return false;
-    if (CellRefs && nc >= (std::size_t(1) << (kRefBits - 1)))
-      return false;
+    if constexpr (CellRefs)
+      if (nc >= (std::size_t(1) << (kRefBits - 1)))
+        return false;
     return !FineInKey || kFineShift + shift_for(nv, nc) <= 63; // bit 63: match_packed
   }
 
