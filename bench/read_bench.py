@@ -14,10 +14,16 @@ times, alternating, after one untimed warm-up read of the file (page
 cache); the best time of each is compared. One JSON object on stdout, with
 the machine's load before the run: on a shared machine compare ratios, not
 seconds, and prefer cpu_ratio (CPU seconds of `bisect info` over those of
-the reference read), which a busy machine disturbs least.
+the reference read), which a busy machine disturbs least. A shared machine
+also drifts in speed from one minute to the next (on 2026-12-04 VTK's read
+of one file took 1.59 to 2.83 s within one run), so the best times of the
+two may come from different moments: paired_ratios divides each `bisect
+info` time by the reference read right after it, and paired_ratio_median
+is their median.
 """
 import json
 import os
+import statistics
 import subprocess
 import sys
 import time
@@ -101,6 +107,8 @@ def main():
         "reference_seconds": round(best_ref, 3),
         "reference_cpu_seconds": round(min(ref_cpu), 3),
         "ratio": round(best_ours / best_ref, 2),
+        "paired_ratios": [round(o / r, 2) for o, r in zip(ours_wall, ref)],
+        "paired_ratio_median": round(statistics.median(o / r for o, r in zip(ours_wall, ref)), 2),
         "cpu_ratio": round(min(ours_cpu) / min(ref_cpu), 2),
         "bisect_seconds_per_million_cells": round(best_ours / cells * 1e6, 3),
         "reference_seconds_per_million_cells": round(best_ref / cells * 1e6, 3),
