@@ -3059,6 +3059,18 @@ template <int Dim> struct FoldVisitor {
   }
 };
 
+// The offsets of a counting sort of the cells' vertex slots by vertex:
+// vertex v's slots go to start[v] .. start[v + 1].
+std::vector<std::size_t> vertex_offsets(const Mesh &mesh) {
+  const std::size_t nv = mesh.num_vertices();
+  std::vector<std::size_t> start(nv + 1, 0);
+  for (VertexId v : mesh.cells)
+    ++start[v + 1];
+  for (std::size_t v = 1; v <= nv; ++v)
+    start[v] += start[v - 1];
+  return start;
+}
+
 // `faces`, when given and in 3D or 4D, receives the number of distinct faces of
 // Dim - 1 vertices (edges in 3D, triangles in 4D).
 // With `wound` (from centroids_wound_once), faces where the count is surely
@@ -3071,11 +3083,7 @@ std::string find_fold(const Mesh &mesh, std::size_t *faces = nullptr,
     constexpr int N = Dim + 1;
     const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
     // The faces are the vertices: cells by vertex (counting sort).
-    std::vector<std::size_t> start(nv + 1, 0);
-    for (VertexId v : mesh.cells)
-      ++start[v + 1];
-    for (std::size_t v = 1; v <= nv; ++v)
-      start[v] += start[v - 1];
+    const std::vector<std::size_t> start = vertex_offsets(mesh);
     std::vector<VertexId> pairs(2 * mesh.cells.size());
     std::vector<std::size_t> cursor(start.begin(), start.end() - 1);
     for (std::size_t c = 0; c < nc; ++c) {
@@ -3129,11 +3137,7 @@ std::string find_fold(const Mesh &mesh, std::size_t *faces = nullptr,
     // order: what the walk handed to the same test.
     constexpr int N = Dim + 1;
     const std::size_t nv = mesh.num_vertices(), nc = mesh.num_cells();
-    std::vector<std::size_t> start(nv + 1, 0);
-    for (VertexId v : mesh.cells)
-      ++start[v + 1];
-    for (std::size_t v = 1; v <= nv; ++v)
-      start[v] += start[v - 1];
+    const std::vector<std::size_t> start = vertex_offsets(mesh);
     std::vector<CellId, UninitialisedAllocator<CellId>> star(mesh.cells.size());
     {
       // Each thread scans all cells and files those of its range of vertices.
