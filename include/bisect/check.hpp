@@ -48,6 +48,11 @@ struct CheckOptions {
 // sides (the centroid of a boundary facet on another boundary facet); and,
 // when `original` is given, volume, boundary
 // measure (relative tolerance 1e-9) and Euler characteristic unchanged.
+// The invariants' part of check_conformity: volume and boundary measure
+// within a relative 1e-9 of `original`'s, the same Euler characteristic;
+// the first that differs, in check_conformity's words.
+CheckResult compare_invariants(const Invariants &original, const Invariants &now);
+
 CheckResult check_conformity(const Mesh &mesh, const Invariants *original = nullptr,
                              const CheckOptions &options = {});
 

@@ -6,6 +6,16 @@ for d in 2 3 4; do
   expect_exit 0 "$BISECT" generate kuhn --dim $d --cells 2 -o k$d.vtu
   expect_exit 0 "$BISECT" check k$d.vtu
 done
+# check --against compares the invariants validation measured: a Kuhn cube
+# against a larger one (exit 2, the first that differs), and a mesh against
+# a copy refined from it.
+expect_exit 0 "$BISECT" generate kuhn --dim 3 --cells 3 -o k3c3.vtu
+expect_exit 2 "$BISECT" check k3.vtu --against s3.vtu --json
+grep -q '"conforming":false' "$WORK/out" || fail "check --json: not conforming"
+grep -q 'volume changed: ' "$WORK/out" || fail "check --against: no volume change named"
+expect_exit 0 "$BISECT" check k3c3.vtu --against k3.vtu
+grep -q "conforming (162 cells, volume, boundary and Euler characteristic match k3.vtu)" \
+  "$WORK/out" || fail "check --against: $(cat "$WORK/out")"
 expect_exit 0 "$BISECT" quality s3.vtu --classes
 grep -q "^classes: 1$" "$WORK/out" || fail "one tet is one class"
 # Forced mark types: the file carries them, refinement continues them, and the
