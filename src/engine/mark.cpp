@@ -10,9 +10,13 @@
 #include "core/geometry.hpp"
 #include "core/names.hpp"
 #include "core/numbering.hpp"
+#include "engine/mark_testing.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
+#include <memory>
 #include <stdexcept>
 #include <string_view>
 
@@ -314,6 +318,7 @@ public:
     mids_.clear();
     seq_.clear();
     comparing_ = false;
+    differs_ = false; // a walk that found a difference may be used again
     start(x, s, t, opposite);
   }
   bool same(const VertexId *x, Stage s, int t, int opposite) {
@@ -415,6 +420,85 @@ private:
   bool comparing_ = false, differs_ = false;
 };
 
+// The walks of a pair of Maubach cells depend on little: each side's tag,
+// the position of the vertex opposite the facet and the order of the
+// facet's ids in its tuple. A walk compares ids of the facet with each other
+// (which half comes first) and tests ids for equality, and its labels lie
+// above every id. So the pair's result is the result for the same pair
+// renamed: the facet's ids by their rank among themselves (0 to Dim - 1),
+// the two opposite vertices Dim and Dim + 1 (distinct, as in a valid mesh;
+// equal ones take the walk). The table keeps each renamed pair's result,
+// found by one walk the first time it is met.
+std::atomic<bool> g_pair_table{true}; // testing::set_state_pair_table
+
+template <int Dim> class MaubachPairs {
+  static constexpr int N = Dim + 1;
+  static constexpr int kOrders = Dim == 2 ? 2 : Dim == 3 ? 6 : 24; // Dim!
+  static constexpr int kSides = N * N * kOrders;                   // tag (0..Dim), opposite, order
+
+public:
+  // calloc: a large table is mapped zeroed, and only the pages of the pairs
+  // met are touched (4D: 352 KiB).
+  MaubachPairs() : known_(static_cast<std::uint8_t *>(std::calloc(kSides * kSides, 1))) {
+    if (!known_)
+      throw std::bad_alloc();
+  }
+
+  // Whether the table applies: tags in range and two opposite vertices.
+  static bool applies(const VertexId *x, int s, int i, const VertexId *y, int t, int j) {
+    return s >= 0 && s <= Dim && t >= 0 && t <= Dim && x[i] != y[j];
+  }
+  // Whether Maubach cells x (tag s, facet opposite i) and y (tag t, facet
+  // opposite j) bisect their shared facet alike; `walk` is the calling
+  // thread's, made with first label Dim + 2. Safe from several threads: two
+  // that meet a new pair at once both walk it and store the same result.
+  bool same(const VertexId *x, int s, int i, const VertexId *y, int t, int j,
+            FacetWalk<Dim> &walk) const {
+    VertexId rx[N], ry[N];
+    const int a = side(x, s, i, x, i, Dim, rx), b = side(y, t, j, x, i, Dim + 1, ry);
+    std::atomic_ref<std::uint8_t> known(known_.get()[std::size_t(a) * kSides + std::size_t(b)]);
+    std::uint8_t k = known.load(std::memory_order_relaxed);
+    if (k == 0) {
+      walk.record(rx, Stage::Maubach, s, i);
+      k = walk.same(ry, Stage::Maubach, t, j) ? 1 : 2;
+      known.store(k, std::memory_order_relaxed);
+    }
+    return k == 1;
+  }
+
+private:
+  // The side's index in the table, and its renamed tuple in r: each id of
+  // the facet (the ids of f but f[fi]) by its rank, `opposite` at i.
+  static int side(const VertexId *x, int tag, int i, const VertexId *f, int fi, VertexId opposite,
+                  VertexId *r) {
+    int rank[Dim], m = 0;
+    for (int k = 0; k < N; ++k) {
+      if (k == i) {
+        r[k] = opposite;
+        continue;
+      }
+      int below = 0;
+      for (int q = 0; q < N; ++q)
+        below += q != fi && f[q] < x[k];
+      r[k] = VertexId(below);
+      rank[m++] = below;
+    }
+    int order = 0; // the ranks' Lehmer code
+    for (int k = 0; k < Dim; ++k) {
+      int smaller = 0;
+      for (int q = k + 1; q < Dim; ++q)
+        smaller += rank[q] < rank[k];
+      order = order * (Dim - k) + smaller;
+    }
+    return (tag * N + i) * kOrders + order;
+  }
+
+  struct Free {
+    void operator()(std::uint8_t *p) const { std::free(p); }
+  };
+  std::unique_ptr<std::uint8_t, Free> known_; // per pair 0: not met yet, 1: same, 2: different
+};
+
 } // namespace
 
 std::string check_state_consistency(const Mesh &mesh, const InteriorFacets *interior) {
@@ -451,13 +535,22 @@ std::string check_state_consistency(const Mesh &mesh, const InteriorFacets *inte
     };
     // Stops at the first facet the two cells would bisect differently, with
     // its message in `found`.
-    auto visitor = [&](FacetWalk<D> &walk, std::string &found) {
+    const MaubachPairs<D> pairs;
+    const bool table = g_pair_table.load();
+    auto visitor = [&](FacetWalk<D> &walk, FacetWalk<D> &renamed, std::string &found) {
       return [&](CellId a, int i, CellId b, int j) {
         if (reflected(a, i, b, j))
           return true;
-        walk.record(mesh.cell(a), mesh.stage[a], mesh.tag[a], i);
-        if (walk.same(mesh.cell(b), mesh.stage[b], mesh.tag[b], j))
-          return true;
+        const VertexId *x = mesh.cell(a), *y = mesh.cell(b);
+        if (table && mesh.stage[a] == Stage::Maubach && mesh.stage[b] == Stage::Maubach &&
+            MaubachPairs<D>::applies(x, mesh.tag[a], i, y, mesh.tag[b], j)) {
+          if (pairs.same(x, mesh.tag[a], i, y, mesh.tag[b], j, renamed))
+            return true;
+        } else {
+          walk.record(x, mesh.stage[a], mesh.tag[a], i);
+          if (walk.same(y, mesh.stage[b], mesh.tag[b], j))
+            return true;
+        }
         VertexId facet[4];
         for (int k = 0, m = 0; k <= D; ++k)
           if (k != i)
@@ -469,8 +562,8 @@ std::string check_state_consistency(const Mesh &mesh, const InteriorFacets *inte
       };
     };
     if (!interior) {
-      FacetWalk<D> walk(order, first_label);
-      for_each_interior_facet(mesh, visitor(walk, failure));
+      FacetWalk<D> walk(order, first_label), renamed(order, VertexId(D + 2));
+      for_each_interior_facet(mesh, visitor(walk, renamed, failure));
       return;
     }
     // The recorded pieces by all threads; the first finding in piece order,
@@ -479,10 +572,10 @@ std::string check_state_consistency(const Mesh &mesh, const InteriorFacets *inte
     const int workers = int(std::clamp<std::size_t>(interior->size(), 1, std::size_t(threads())));
 #pragma omp parallel num_threads(workers)
     {
-      FacetWalk<D> walk(order, first_label);
+      FacetWalk<D> walk(order, first_label), renamed(order, VertexId(D + 2));
 #pragma omp for schedule(dynamic, 1)
       for (std::size_t p = 0; p < interior->size(); ++p)
-        for_each_interior_facet(mesh, (*interior)[p], visitor(walk, found[p]));
+        for_each_interior_facet(mesh, (*interior)[p], visitor(walk, renamed, found[p]));
     }
     for (std::string &s : found)
       if (!s.empty()) {
@@ -520,3 +613,44 @@ const char *marking_name(Marking marking) {
 }
 
 } // namespace bisect
+
+namespace bisect::testing {
+void set_state_pair_table(bool on) {
+  g_pair_table = on;
+}
+
+std::vector<bool> state_pair_verdicts(int dim, const std::vector<VertexId> &cells,
+                                      const std::vector<std::uint8_t> &tags, bool table) {
+  const int n = dim + 1;
+  const std::size_t count = tags.size() / 2;
+  std::vector<bool> alike(count);
+  if (cells.empty())
+    return alike;
+  Mesh m; // only for the edge order, which Maubach walks never ask
+  m.dim = dim;
+  m.marking = Marking::Sorted;
+  const EdgeOrder order = edge_order(m);
+  const VertexId first = *std::max_element(cells.begin(), cells.end()) + 1;
+  dispatch(dim, [&]<int D>() {
+    const MaubachPairs<D> pairs;
+    FacetWalk<D> walk(order, first), renamed(order, VertexId(D + 2));
+    for (std::size_t k = 0; k < count; ++k) {
+      const VertexId *x = cells.data() + 2 * k * n, *y = x + n;
+      auto opposite = [&](const VertexId *u, const VertexId *v) {
+        for (int q = 0; q < n; ++q)
+          if (std::find(v, v + n, u[q]) == v + n)
+            return q;
+        throw std::invalid_argument("state_pair_verdicts: the two cells share no facet");
+      };
+      const int i = opposite(x, y), j = opposite(y, x), s = tags[2 * k], t = tags[2 * k + 1];
+      if (table) {
+        alike[k] = pairs.same(x, s, i, y, t, j, renamed);
+      } else {
+        walk.record(x, Stage::Maubach, s, i);
+        alike[k] = walk.same(y, Stage::Maubach, t, j);
+      }
+    }
+  });
+  return alike;
+}
+} // namespace bisect::testing

@@ -5,11 +5,15 @@
 #include "bisect/refine.hpp"
 #include "bisect/state.hpp"
 #include "core/numbering.hpp"
+#include "engine/mark_testing.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
 
+#include <numeric>
+#include <random>
 #include <set>
+#include <sstream>
 
 using namespace bisect;
 
@@ -137,4 +141,76 @@ TEST_CASE("state arrays that are not a permutation are rejected", "[mark][io]") 
       a.values[1] = a.values[0];
   REQUIRE_THROWS_WITH(decode_state(m, "in.vtu"),
                       Catch::Contains("in.vtu") && Catch::Contains("permutation"));
+}
+
+// check_state_consistency answers a pair of Maubach cells from a table of
+// renamed pairs (the facet's ids by rank, the opposite vertices after them),
+// filled as pairs are met. Every kind of 3D pair, and a sample of the 4D
+// ones, each with random ids and facet orders: one table shared by all
+// pairs gives each pair the verdict of the walk over its real ids; and the
+// check of a mesh of one pair gives the walk's message.
+TEST_CASE("state check: the table of renamed Maubach pairs gives the walk's verdict",
+          "[mark][state][3d][4d]") {
+  std::mt19937_64 rng(4242);
+  for (int dim : {3, 4}) {
+    const int n = dim + 1;
+    const VertexId nv = 60;
+    const int kinds = dim * n; // a side's tag (1..dim) and opposite position
+    std::vector<VertexId> cells;
+    std::vector<std::uint8_t> tags;
+    auto add_pair = [&](int sa, int sb) {
+      std::vector<VertexId> ids(nv);
+      std::iota(ids.begin(), ids.end(), 0);
+      std::shuffle(ids.begin(), ids.end(), rng);
+      std::vector<int> orders(n - 1); // the facet's ids in tuple order
+      for (int side = 0; side < 2; ++side) {
+        const int s = side ? sb : sa, opposite = (s / dim) % n;
+        std::iota(orders.begin(), orders.end(), 0);
+        std::shuffle(orders.begin(), orders.end(), rng);
+        for (int k = 0, f = 0; k < n; ++k)
+          cells.push_back(k == opposite ? ids[n - 1 + side] : ids[orders[f++]]);
+        tags.push_back(std::uint8_t(1 + s % dim));
+      }
+    };
+    if (dim == 3) {
+      for (int sa = 0; sa < kinds; ++sa) // every kind of each side
+        for (int sb = 0; sb < kinds; ++sb)
+          for (int k = 0; k < 36; ++k) // random facet orders
+            add_pair(sa, sb);
+    } else {
+      for (int k = 0; k < 20000; ++k)
+        add_pair(std::uniform_int_distribution<int>(0, kinds - 1)(rng),
+                 std::uniform_int_distribution<int>(0, kinds - 1)(rng));
+    }
+    const std::vector<bool> walked = testing::state_pair_verdicts(dim, cells, tags, false),
+                            tabled = testing::state_pair_verdicts(dim, cells, tags, true);
+    const std::size_t pairs = walked.size();
+    std::size_t alike = 0;
+    for (std::size_t k = 0; k < pairs; ++k) {
+      INFO(dim << "D, pair " << k);
+      REQUIRE(tabled[k] == walked[k]);
+      alike += walked[k];
+    }
+    INFO(dim << "D: " << pairs << " pairs, " << alike << " alike");
+    REQUIRE(alike > pairs / 100);
+    REQUIRE(alike < pairs / 2);
+    // The whole check on meshes of one pair, with and without the table.
+    Mesh m;
+    m.dim = dim;
+    m.marking = Marking::Sorted;
+    m.coords.assign(std::size_t(nv) * dim, 0.0);
+    m.stage.assign(2, Stage::Maubach);
+    for (std::size_t k = 0; k < pairs; k += 7) {
+      m.cells.assign(cells.begin() + std::ptrdiff_t(2 * k * n),
+                     cells.begin() + std::ptrdiff_t(2 * (k + 1) * n));
+      m.tag = {tags[2 * k], tags[2 * k + 1]};
+      testing::set_state_pair_table(false);
+      const std::string walk = check_state_consistency(m);
+      testing::set_state_pair_table(true);
+      INFO(dim << "D, pair " << k);
+      REQUIRE(check_state_consistency(m) == walk);
+      REQUIRE(walk.empty() == walked[k]);
+    }
+  }
+  testing::set_state_pair_table(true);
 }
