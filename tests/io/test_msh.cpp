@@ -1,5 +1,6 @@
 // Gmsh .msh reading and writing (src/io_msh.cpp).
 #include "bisect/io.hpp"
+#include "io/msh_testing.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -709,5 +710,69 @@ TEST_CASE("msh: every truncation or single-byte corruption of a binary file fail
       attempt(bad);
     }
   fs::remove(good);
+  fs::remove(path);
+}
+
+// The reader keeps a binary file's elements as runs while their tags run on
+// by one, else one reference each (the runs so far expanded). Both must give
+// the same mesh, or the same message, for every single-byte corruption and
+// every truncation of binary files of both versions: tags in one range
+// (runs throughout), tags out of order (write_msh's blocks per entity: the
+// expansion), several dimensions with tagged entities, and Gmsh's own.
+TEST_CASE("msh: elements kept as runs read as one reference each would, damaged or not", "[io]") {
+  std::vector<std::pair<std::string, std::string>> files; // name, bytes
+  Mesh plain = sample_mesh(3, 1);
+  plain.cell_data.erase(plain.cell_data.begin(), plain.cell_data.begin() + 2); // one block
+  const std::string path = temp_path("runs.msh");
+  write_msh(path, plain);
+  files.emplace_back("one block", read_file(path));
+  write_msh(path, sample_mesh(2, 1));
+  files.emplace_back("blocks per entity", read_file(path));
+  write_msh(path, read_msh(testing::data_path("box-tagged.msh")));
+  files.emplace_back("tagged entities", read_file(path));
+  files.emplace_back("gmsh 2.2 binary", read_file(msh_data("two_boxes_22b.msh")));
+  files.emplace_back("gmsh 4.1 binary", read_file(msh_data("two_boxes_41b.msh")));
+  std::size_t compared = 0, read = 0;
+  for (const auto &[name, bytes] : files) {
+    auto outcome = [&](bool runs) {
+      testing::set_msh_element_runs(runs);
+      std::pair<std::string, Mesh> o;
+      try {
+        o.second = read_msh(path);
+      } catch (const InputError &e) {
+        o.first = e.what();
+      }
+      testing::set_msh_element_runs(true);
+      return o;
+    };
+    auto same = [&](const std::string &content) {
+      std::ofstream(path, std::ios::binary | std::ios::trunc) << content;
+      const auto [message, mesh] = outcome(true);
+      const auto [expected, reference] = outcome(false);
+      INFO(name << ": " << expected);
+      REQUIRE(message == expected);
+      if (message.empty()) {
+        require_identical(mesh, reference);
+        REQUIRE(mesh.entities.size() == reference.entities.size());
+        for (std::size_t k = 0; k < mesh.entities.size(); ++k) {
+          REQUIRE(mesh.entities[k].vertices == reference.entities[k].vertices);
+          require_same_arrays(mesh.entities[k].data, reference.entities[k].data);
+        }
+        ++read;
+      }
+      ++compared;
+    };
+    same(bytes);
+    for (std::size_t n = 0; n < bytes.size(); n += 11)
+      same(bytes.substr(0, n));
+    for (std::size_t i = 0; i < bytes.size(); ++i)
+      for (unsigned char flip : {0x01, 0x80}) {
+        std::string bad = bytes;
+        bad[i] = char(static_cast<unsigned char>(bad[i]) ^ flip);
+        same(bad);
+      }
+  }
+  INFO(compared << " files compared, " << read << " read");
+  REQUIRE(read > 100);
   fs::remove(path);
 }

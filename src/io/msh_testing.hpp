@@ -1,0 +1,12 @@
+// Test hooks of the .msh reader (not part of the installed API).
+#pragma once
+
+namespace bisect::testing {
+
+// Whether the reader keeps the elements of a binary file as runs while their
+// tags run on by one (ElementRun in msh.cpp; the default) or one reference
+// per element. Both must read the same mesh and give the same messages,
+// which a test checks.
+void set_msh_element_runs(bool on);
+
+} // namespace bisect::testing
