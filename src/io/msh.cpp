@@ -60,6 +60,9 @@ namespace {
 
 constexpr std::size_t kNone = std::size_t(-1);
 constexpr std::uint32_t kNoIndex = std::numeric_limits<std::uint32_t>::max();
+// Whether element references and data tags that run on by one are kept as
+// runs (testing::set_msh_element_runs turns it off).
+std::atomic<bool> g_element_runs{true};
 
 // ---------------------------------------------------------------------------
 // Gmsh element types
@@ -467,8 +470,28 @@ struct DataBlock {
   int components = 1;
   long long step = 0;
   std::size_t at = 0;
+  // The entity tag of each row: while they run on by one (the usual file)
+  // only the first and the count are kept, else all (`tags`).
+  std::uint64_t first_tag = 0;
+  std::size_t run = 0; // rows so far, while they run on by one
   std::vector<std::uint64_t> tags;
   std::vector<double> values; // `components` per tag
+  std::size_t size() const { return tags.empty() ? run : tags.size(); }
+  std::uint64_t tag(std::size_t i) const { return tags.empty() ? first_tag + i : tags[i]; }
+  void add_tag(std::uint64_t t) {
+    if (tags.empty() && (run == 0 || t == first_tag + run) && g_element_runs) {
+      if (run == 0)
+        first_tag = t;
+      ++run;
+      return;
+    }
+    if (tags.empty()) {
+      tags.reserve(std::max<std::size_t>(2 * run, 16));
+      for (std::size_t i = 0; i < run; ++i)
+        tags.push_back(first_tag + i);
+    }
+    tags.push_back(t);
+  }
 };
 
 struct MshFile {
@@ -676,8 +699,6 @@ void read_nodes41(Source &src, MshFile &f) {
 
 // Records one element: its tag (for duplicate checks and element data), its
 // nodes if it may become a cell, and what kind of element it is.
-std::atomic<bool> g_element_runs{true}; // testing::set_msh_element_runs
-
 // Records an element's reference: as part of a run while the tags run on
 // by one (stride: the distance to the next element in a binary block, 0 in
 // ASCII files), else in f.elements, the runs so far first.
@@ -940,7 +961,8 @@ void keep_data(Source &src, MshFile &f, DataBlock &&b) {
         src.fail(b.at, "data " + quoted(b.name) + " changes from " + std::to_string(d.components) +
                            " to " + std::to_string(b.components) +
                            " components within one time step");
-      d.tags.insert(d.tags.end(), b.tags.begin(), b.tags.end());
+      for (std::size_t i = 0; i < b.size(); ++i)
+        d.add_tag(b.tag(i));
       d.values.insert(d.values.end(), b.values.begin(), b.values.end());
     }
     return;
@@ -989,10 +1011,10 @@ void read_data(Source &src, MshFile &f, bool on_nodes, std::size_t section_at) {
     src.finish_line("the integer tags");
   const std::size_t fits =
       src.affordable(n, src.binary ? 4 + 8 * components : 2 * (1 + components));
-  b.tags.reserve(fits);
+
   b.values.reserve(fits * components);
   for (std::uint64_t i = 0; i < n; ++i) {
-    b.tags.push_back(src.binary ? src.raw_count("data entity tag") : src.count("data entity tag"));
+    b.add_tag(src.binary ? src.raw_count("data entity tag") : src.count("data entity tag"));
     for (std::uint64_t k = 0; k < components; ++k)
       b.values.push_back(src.binary ? src.raw<double>("data value") : src.real("data value"));
   }
@@ -1148,11 +1170,11 @@ DataArray node_array(Source &src, const MshFile &f, const DataBlock &b,
   const std::size_t nc = std::size_t(b.components);
   DataArray a{b.name, b.components, std::vector<double>(nv * nc, 0.0)};
   std::vector<char> covered(nv, 0);
-  for (std::size_t i = 0; i < b.tags.size(); ++i) {
-    const std::size_t p = f.nodes.find(b.tags[i]);
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    const std::size_t p = f.nodes.find(b.tag(i));
     if (p == kNone)
-      src.fail(b.at, "node data " + quoted(b.name) + " refers to node " +
-                         std::to_string(b.tags[i]) + ", which is not in $Nodes");
+      src.fail(b.at, "node data " + quoted(b.name) + " refers to node " + std::to_string(b.tag(i)) +
+                         ", which is not in $Nodes");
     const VertexId v = vertex_of[p];
     if (v == kNoVertex)
       continue;
@@ -1229,10 +1251,10 @@ DataArray cell_array(Source &src, const MshFile &f, const DataBlock &b, int dim)
   std::vector<char> covered(ncells, 0);
   ElementFinder finder(f);
   ElementRef e;
-  for (std::size_t i = 0; i < b.tags.size(); ++i) {
-    if (!finder.find(b.tags[i], e))
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    if (!finder.find(b.tag(i), e))
       src.fail(b.at, "element data " + quoted(b.name) + " refers to element " +
-                         std::to_string(b.tags[i]) + ", which is not in $Elements");
+                         std::to_string(b.tag(i)) + ", which is not in $Elements");
     if (e.dim != dim || e.index == kNoIndex)
       continue; // a dropped lower-dimensional element
     std::copy_n(b.values.begin() + std::ptrdiff_t(i * nc), nc,

@@ -714,7 +714,8 @@ TEST_CASE("msh: every truncation or single-byte corruption of a binary file fail
 }
 
 // The reader keeps a binary file's elements as runs while their tags run on
-// by one, else one reference each (the runs so far expanded). Both must give
+// by one, else one reference each (the runs so far expanded), and a data
+// section's row tags as a first tag and a count while they do. Both must give
 // the same mesh, or the same message, for every single-byte corruption and
 // every truncation of binary files of both versions: tags in one range
 // (runs throughout), tags out of order (write_msh's blocks per entity: the
