@@ -20,6 +20,12 @@ of one file took 1.59 to 2.83 s within one run), so the best times of the
 two may come from different moments: paired_ratios divides each `bisect
 info` time by the reference read right after it, and paired_ratio_median
 is their median.
+
+VTK cannot read .msh. For FILE.msh with a FILE.vtu beside it (the same
+mesh, e.g. written by `bisect refine ... -o FILE.vtu` and `-o FILE.msh`),
+VTK's reader of that .vtu is timed too, in the same loop, and the JSON adds
+vtu_twin, vtk_twin_seconds (best) and ratio_to_vtk_twin (bisect's best time
+on the .msh over VTK's best on the .vtu).
 """
 import json
 import os
@@ -48,6 +54,18 @@ def children_cpu():
     import resource
     r = resource.getrusage(resource.RUSAGE_CHILDREN)
     return r.ru_utime + r.ru_stime
+
+
+def vtk_reader(path):
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+
+    def read():
+        reader = vtkXMLUnstructuredGridReader()
+        reader.SetFileName(path)
+        reader.Update()
+        return reader.GetOutput().GetNumberOfCells()
+
+    return read
 
 
 def reference_reader(path):
@@ -86,9 +104,19 @@ def main():
     load = open("/proc/loadavg").read().split()[:3]
     name, ref_read = reference_reader(path)
     Path(path).read_bytes()  # warm the page cache
+    twin = None
+    if path.lower().endswith(".msh") and Path(path[:-4] + ".vtu").is_file():
+        twin = path[:-4] + ".vtu"
+        twin_read = vtk_reader(twin)
+        Path(twin).read_bytes()
+    twin_times = []
     ours_wall, ours_cpu, ref, ref_cpu = [], [], [], []
     info = None
     for _ in range(repeats):
+        if twin:
+            t0 = time.perf_counter()
+            twin_read()
+            twin_times.append(time.perf_counter() - t0)
         cpu0 = children_cpu()
         wall, info = run_bisect(bisect, path)
         ours_wall.append(wall)
@@ -99,6 +127,11 @@ def main():
         ref_cpu.append(time.process_time() - c0)
     cells = info["cells"]
     best_ours, best_ref = min(ours_wall), min(ref)
+    extra = {}
+    if twin:
+        extra = {"vtu_twin": twin, "vtk_twin_seconds": round(min(twin_times), 3),
+                 "all_vtk_twin_seconds": [round(t, 3) for t in twin_times],
+                 "ratio_to_vtk_twin": round(best_ours / min(twin_times), 2)}
     print(json.dumps({
         "file": path, "bytes": os.path.getsize(path), "cells": cells,
         "reference": name, "reference_cells": ref_cells, "repeats": repeats,
@@ -114,7 +147,7 @@ def main():
         "reference_seconds_per_million_cells": round(best_ref / cells * 1e6, 3),
         "all_bisect_seconds": [round(t, 3) for t in ours_wall],
         "all_reference_seconds": [round(t, 3) for t in ref],
-        "load_before": " ".join(load), "cpus": os.cpu_count(),
+        "load_before": " ".join(load), "cpus": os.cpu_count(), **extra,
     }))
 
 
