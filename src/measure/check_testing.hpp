@@ -32,6 +32,10 @@ void use_wide_final_walk(bool on);
 // enough (CellRefs, see Walk in check.cpp); with `on` false it always takes
 // the 16-byte packing, so a test can compare the two.
 void use_narrow_facet_walk(bool on);
+// Whether the 4D angle check walks all triangles of all cells (FoldVisitor)
+// instead of finding each from its smallest vertex's star (the default).
+// Both must give the same faces count, findings and skipped faces.
+void use_walk_fold4(bool on);
 
 // The overlap search (find_overlap in check.cpp) reads a small grid per
 // group of cells; with `on`, every cell makes its own range search instead

@@ -1294,3 +1294,61 @@ TEST_CASE("angle check: the quick atan2 stays within 2e-5 of std::atan2", "[chec
   CHECK(worst < 2e-5);
   CHECK(std::isnan(testing::rough_angle(0.0, 0.0))); // the exact path takes it
 }
+
+TEST_CASE("angle check (4D): the triangles found from the vertex stars give the walk's faces "
+          "count, skipped faces and findings",
+          "[check][4d]") {
+  // Valid meshes, and Kuhn meshes with one vertex id changed (tangled,
+  // flat, non-manifold; some found by the angle sums alone).
+  std::vector<Mesh> meshes{graded_kuhn(4, 2), generate_kuhn(4, 2)};
+  const Mesh kuhn = generate_kuhn(4, 2);
+  for (std::size_t c = 0; c < kuhn.num_cells(); c += 23)
+    for (int i = 0; i < 5; ++i)
+      for (VertexId v = VertexId(c % 7); v < kuhn.num_vertices(); v += 9) {
+        const VertexId *cell = kuhn.cell(CellId(c));
+        if (std::find(cell, cell + 5, v) != cell + 5)
+          continue;
+        Mesh m = kuhn;
+        m.cell(CellId(c))[i] = v;
+        meshes.push_back(m);
+      }
+  struct Seen {
+    std::string message;
+    long long euler = 0;
+    std::vector<std::vector<VertexId>> skipped;
+  };
+  auto run = [](const Mesh &m, bool walk) {
+    testing::use_walk_fold4(walk);
+    Seen s;
+    testing::record_skipped_faces(&s.skipped);
+    Mesh copy = m;
+    InputFacts facts;
+    try {
+      prepare_input(copy, "k.vtu", {}, &facts);
+      s.message = "no error";
+      s.euler = facts.invariants.euler;
+    } catch (const InputError &e) {
+      s.message = e.what();
+    }
+    testing::record_skipped_faces(nullptr);
+    testing::use_walk_fold4(false);
+    std::sort(s.skipped.begin(), s.skipped.end()); // threads record in any order
+    return s;
+  };
+  int by_angles = 0, valid = 0;
+  for (int threads : {1, 2}) {
+    set_threads(threads);
+    for (const Mesh &m : meshes) {
+      const Seen stars = run(m, false), walk = run(m, true);
+      INFO(threads << " threads: " << walk.message);
+      CHECK(stars.message == walk.message);
+      CHECK(stars.euler == walk.euler);
+      CHECK(stars.skipped == walk.skipped);
+      by_angles += Contains(" cells around ").match(walk.message);
+      valid += walk.message == "no error";
+    }
+  }
+  set_threads(0);
+  CHECK(by_angles >= 4);
+  CHECK(valid >= 4);
+}
