@@ -1244,9 +1244,21 @@ private:
   std::size_t next_ = 0;
 };
 
-DataArray cell_array(Source &src, const MshFile &f, const DataBlock &b, int dim) {
+DataArray cell_array(Source &src, const MshFile &f, DataBlock &b, int dim) {
   const std::size_t nc = std::size_t(b.components);
   const std::size_t ncells = f.simplices[dim].size();
+  // The usual file: row i holds cell i's values, every cell once. The rows
+  // are then the array as they are (5.4 M tets: 48 MB of fresh memory and
+  // a copy less per array).
+  if (b.size() == ncells) {
+    ElementFinder finder(f);
+    ElementRef e;
+    bool in_order = true;
+    for (std::size_t i = 0; i < ncells && in_order; ++i)
+      in_order = finder.find(b.tag(i), e) && e.dim == dim && e.index == i;
+    if (in_order)
+      return DataArray{b.name, b.components, std::move(b.values)};
+  }
   DataArray a{b.name, b.components, std::vector<double>(ncells * nc, 0.0)};
   std::vector<char> covered(ncells, 0);
   ElementFinder finder(f);

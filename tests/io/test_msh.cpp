@@ -498,6 +498,26 @@ TEST_CASE("msh: truncated file names the line", "[io]") {
   fs::remove(path);
 }
 
+TEST_CASE("msh: element data rows in another order than the cells go to their cells", "[io]") {
+  // One row per cell, as the fast path's files have, but listed backwards,
+  // and again in order; and a row missing.
+  const std::string data = "$ElementData\n1\n\"heat\"\n1\n0.0\n3\n0\n1\n2\n";
+  for (const auto &[rows, want] : std::vector<std::pair<std::string, std::vector<double>>>{
+           {"3 30\n2 20\n", {20, 30}}, {"2 20\n3 30\n", {20, 30}}}) {
+    const std::string path =
+        write_file("data_order.msh", kSquare22 + data + rows + "$EndElementData\n");
+    const Mesh m = read_msh(path);
+    const DataArray *heat = find_array(m.cell_data, "heat");
+    REQUIRE(heat);
+    CHECK(heat->values == want);
+    fs::remove(path);
+  }
+  const std::string path = write_file(
+      "data_short.msh", kSquare22 + replaced(data, "\n2\n", "\n1\n") + "3 30\n$EndElementData\n");
+  CHECK_THROWS_WITH(read_msh(path), Contains("has no value for element 2"));
+  fs::remove(path);
+}
+
 TEST_CASE("msh: element referencing missing node is rejected", "[io]") {
   const std::string path =
       write_file("missing_node.msh", replaced(kSquare22, "1 1 3 4\n", "1 1 3 9\n"));
