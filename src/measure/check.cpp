@@ -3013,6 +3013,27 @@ std::string angle_message(const std::string &face, const AngleFinding &f, int di
   return "tangled: the " + std::to_string(f.cells) + " cells around " + face + buf;
 }
 
+// Whether the angle check skips face `key` (sorted ids): where the count is
+// surely 1 around its centroid (summed in key order, the same for every
+// cell), its cells go round it once. A test may ask for the skipped faces.
+template <int Dim, std::size_t K>
+bool wound_once_at(const Mesh &mesh, const WoundBoxes<Dim> &wound,
+                   const std::array<VertexId, K> &key) {
+  double mid[Dim] = {};
+  for (VertexId v : key)
+    for (int d = 0; d < Dim; ++d)
+      mid[d] += mesh.point(v)[d];
+  for (int d = 0; d < Dim; ++d)
+    mid[d] /= double(K);
+  if (!wound.one_at(mid))
+    return false;
+  if (g_skipped_faces) {
+    std::lock_guard<std::mutex> lock(g_skipped_faces_mutex);
+    g_skipped_faces->emplace_back(key.begin(), key.end());
+  }
+  return true;
+}
+
 // The face visitor of find_fold (3D, 4D): the star of each
 // codimension-2 face, until the first tangled one.
 template <int Dim> struct FoldVisitor {
@@ -3032,23 +3053,8 @@ template <int Dim> struct FoldVisitor {
     ++faces;
     if (!found.empty())
       return;
-    if (wound) {
-      // Where the count is surely 1 around the face's midpoint (the same
-      // sum for every cell: the key is sorted), its cells go round it once.
-      double mid[Dim] = {};
-      for (VertexId v : key)
-        for (int d = 0; d < Dim; ++d)
-          mid[d] += mesh->point(v)[d];
-      for (int d = 0; d < Dim; ++d)
-        mid[d] /= Dim - 1;
-      if (wound->one_at(mid)) {
-        if (g_skipped_faces) {
-          std::lock_guard<std::mutex> lock(g_skipped_faces_mutex);
-          g_skipped_faces->emplace_back(key.begin(), key.end());
-        }
-        return;
-      }
-    }
+    if (wound && wound_once_at(*mesh, *wound, key))
+      return;
     extras.clear();
     for (int i = 0; i < count; ++i) {
       const VertexId *cell = mesh->cell(CellId(refs[i] / M));
@@ -3096,6 +3102,21 @@ vertex_stars(const Mesh &mesh, const std::vector<std::size_t> &start) {
     }
   }
   return star;
+}
+
+// What the angle check's blocks found: their face counts added into *faces
+// (when asked), and the first finding in block order (empty if none).
+std::string first_finding(const std::vector<std::string> &found,
+                          const std::vector<std::size_t> &counts, std::size_t *faces) {
+  if (faces) {
+    *faces = 0;
+    for (std::size_t n : counts)
+      *faces += n;
+  }
+  for (const std::string &m : found)
+    if (!m.empty())
+      return m;
+  return {};
 }
 
 // find_fold in 4D, from the stars of the vertices: the triangles by their
@@ -3184,21 +3205,8 @@ std::string find_fold4_stars(const Mesh &mesh, std::size_t *faces, const WoundBo
           std::sort(us.begin(), us.end());
           for (const VertexId u : us) {
             const std::array<VertexId, 3> key{vv, w, u};
-            if (wound) {
-              double mid[4] = {};
-              for (VertexId x : key)
-                for (int d = 0; d < 4; ++d)
-                  mid[d] += mesh.point(x)[d];
-              for (int d = 0; d < 4; ++d)
-                mid[d] /= 3;
-              if (wound->one_at(mid)) {
-                if (g_skipped_faces) {
-                  std::lock_guard<std::mutex> lock(g_skipped_faces_mutex);
-                  g_skipped_faces->emplace_back(key.begin(), key.end());
-                }
-                continue;
-              }
-            }
+            if (wound && wound_once_at(mesh, *wound, key))
+              continue;
             extras.clear();
             int count = 0;
             for (std::size_t j = b; j < e; ++j) {
@@ -3218,15 +3226,7 @@ std::string find_fold4_stars(const Mesh &mesh, std::size_t *faces, const WoundBo
         }
       }
   }
-  if (faces) {
-    *faces = 0;
-    for (std::size_t n : triangles)
-      *faces += n;
-  }
-  for (const std::string &m : found)
-    if (!m.empty())
-      return m;
-  return {};
+  return first_finding(found, triangles, faces);
 }
 
 // `faces`, when given and in 3D or 4D, receives the number of distinct faces of
@@ -3365,15 +3365,7 @@ std::string find_fold(const Mesh &mesh, std::size_t *faces = nullptr,
           }
         }
     }
-    if (faces) {
-      *faces = 0;
-      for (std::size_t n : edges)
-        *faces += n;
-    }
-    for (const std::string &s : found)
-      if (!s.empty())
-        return s;
-    return {};
+    return first_finding(found, edges, faces);
   } else if constexpr (Dim == 4) {
     if (!g_walk_fold4) {
       return find_fold4_stars(mesh, faces, wound);
