@@ -5,10 +5,11 @@ set -euo pipefail
 packages=(cmake g++ make libvtk9-dev libcli11-dev nlohmann-json3-dev catch2 libqhull-dev libmuparser-dev
           zlib1g-dev liblz4-dev liblzma-dev libdeflate-dev python3-meshio python3-vtk9
           python3-h5py xvfb xauth clang-format pybind11-dev python3-pybind11 python3-dev python3-numpy python3-pytest
-          python3-scipy python3-matplotlib libopenmpi-dev openmpi-bin)
-# Optional extras: gmsh (remaking data/). scipy and matplotlib: examples/afem (tests/cli/afem.sh).
+          python3-scipy python3-matplotlib libopenmpi-dev openmpi-bin gmsh)
+# gmsh: the tests read back what Gmsh writes of our .msh output (ASCII and
+# binary 4.1, binary 2.2), and scripts/make_data.sh remakes data/ with it.
+# scipy and matplotlib: examples/afem (tests/cli/afem.sh).
 # libopenmpi-dev, openmpi-bin: the MPI build (-DBISECT_MPI=ON) and its tests (tests/mpi/).
-[[ "${BISECT_WITH_GMSH:-0}" == 1 ]] && packages+=(gmsh)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Remakes the bundled meshes in data/ from their .geo files with Debian's gmsh
-# (4.8; `BISECT_WITH_GMSH=1 scripts/install-deps.sh` installs it). The .geo
+# (4.8; `scripts/install-deps.sh` installs it). The .geo
 # files fix every size, the random seed and single-threaded meshing, so two runs
 # give byte-identical files. Each mesh is re-read by gmsh as a validity check.
 # Usage: scripts/make_data.sh [--check]  (--check: remake into a temp dir and

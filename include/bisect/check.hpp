@@ -48,13 +48,13 @@ struct CheckOptions {
 // sides (the centroid of a boundary facet on another boundary facet); and,
 // when `original` is given, volume, boundary
 // measure (relative tolerance 1e-9) and Euler characteristic unchanged.
+CheckResult check_conformity(const Mesh &mesh, const Invariants *original = nullptr,
+                             const CheckOptions &options = {});
+
 // The invariants' part of check_conformity: volume and boundary measure
 // within a relative 1e-9 of `original`'s, the same Euler characteristic;
 // the first that differs, in check_conformity's words.
 CheckResult compare_invariants(const Invariants &original, const Invariants &now);
-
-CheckResult check_conformity(const Mesh &mesh, const Invariants *original = nullptr,
-                             const CheckOptions &options = {});
 
 // Calls visit(a, i, b, j) once for every facet shared by exactly two cells:
 // cells a and b, and the local index (in each cell's tuple) of the vertex
