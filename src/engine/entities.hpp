@@ -24,6 +24,9 @@ public:
   // the same edge, and that cell finds its halves, which it does not split
   // again: both halves hold m, not both a and b.
   void split(const VertexId *x, int n, VertexId a, VertexId b, VertexId m);
+  // False when split() at the edge (a, b) does nothing: an end is on no
+  // entity (most edges). Safe from several threads between split() calls.
+  bool may_split(VertexId a, VertexId b) const { return on_entity(a) && on_entity(b); }
 
 private:
   struct Ref {

@@ -29,6 +29,11 @@
 
 namespace bisect {
 
+namespace testing {
+int midpoint_room();
+void count_midpoint_retry();
+} // namespace testing
+
 namespace {
 
 // Open-addressing map from an edge key (min << 32 | max, never 0) to the id
@@ -71,7 +76,7 @@ public:
   }
   // Returns the slot's value, inserting `value` when k is absent.
   VertexId insert(std::uint64_t k, VertexId value) {
-    if ((size_ + 1) * 2 > slots_.size())
+    if ((keys_ + 1) * 2 > capacity_)
       grow();
     for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
       Slot &e = slots_[i];
@@ -81,6 +86,7 @@ public:
         e.key = k;
         e.value = value;
         ++size_;
+        ++keys_;
         if (!filter_.empty()) {
           const std::size_t h = filter_bit(k);
           filter_[h >> 6] |= std::uint64_t(1) << (h & 63);
@@ -89,23 +95,45 @@ public:
       }
     }
   }
-  // The parallel kernel's side (Refiner::bisect_all). Room for `more`
-  // entries without growing, so that claim() never moves the table.
-  void reserve(std::size_t more) {
-    while ((size_ + more) * 2 > slots_.size())
+  // The parallel kernel's side (Refiner::bisect_all). A round of `more`
+  // claims inserts at most `more` keys but usually far fewer (a new edge is
+  // bisected by every cell of the pass around it: 3D ball, 0.45 new keys
+  // per claim), so room is made for half of them at a load of 0.6, and
+  // claim() stops inserting at 3/4 of the slots; the round then finds
+  // overflowed() set, grows the table and claims again. The table is never
+  // full, so every probe ends. Room for all `more` at a load of 1/2 made
+  // the last iteration's table 4 times the size the serial kernel's
+  // reaches (3D ball, 12 iterations: 32 MB, a tenth of the peak memory).
+  static constexpr std::uint32_t kNoSlot = std::uint32_t(-1);
+  void begin_round(std::size_t more) {
+    const int room = testing::midpoint_room();
+    more = room > 0 ? more / std::size_t(room) : more / 2;
+    while (capacity_ == 0 || 10 * (keys_ + more) > 6 * capacity_)
       grow();
+    limit_ = capacity_ / 4 * 3;
+    overflow_ = false;
+  }
+  bool overflowed() const { return overflow_; }
+  // After an overflow: a larger table holding the keys claimed (their bids
+  // forgotten), for the round to claim again.
+  void retry_round(std::size_t more) {
+    testing::count_midpoint_retry();
+    grow();
+    begin_round(more);
   }
   // The slot of key k, which the calling thread inserts when no thread has:
-  // safe from several threads at once, between reserve() and settle().
-  std::uint32_t claim(std::uint64_t k) {
-    for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
-      std::atomic_ref<std::uint64_t> key(slots_[i].key);
-      std::uint64_t seen = key.load(std::memory_order_acquire);
-      if (seen == 0 && key.compare_exchange_strong(seen, k, std::memory_order_acq_rel))
-        return std::uint32_t(i);
-      if (seen == k)
-        return std::uint32_t(i);
-    }
+  // safe from several threads at once, between begin_round() and settle().
+  // kNoSlot once the round has overflowed. `credits` (the thread's, 0 at
+  // first) are keys it may insert, taken from the shared count in batches.
+  std::uint32_t claim(std::uint64_t k, std::size_t &credits) {
+    std::atomic_ref<bool> overflow(overflow_);
+    if (overflow.load(std::memory_order_relaxed))
+      return kNoSlot;
+    const std::uint32_t s = claim_slot(k, credits);
+    if (s != kNoSlot)
+      return s;
+    overflow.store(true, std::memory_order_relaxed);
+    return kNoSlot;
   }
   // A slot claimed in this round has no value yet; `who` (an index into the
   // round's work) bids to be its first claimant, the smallest index wins.
@@ -128,33 +156,92 @@ public:
     }
   }
   VertexId value(std::uint32_t s) const { return slots_[s].value; }
-  void add_size(std::size_t n) { size_ += n; }
+  // The end of a round that made n new midpoints (one per key it inserted).
+  void end_round(std::size_t n) {
+    size_ += n;
+    keys_ = size_;
+  }
 
 private:
   static constexpr std::uint32_t kNobody = std::uint32_t(-1);
   // Key and value side by side: a probe that finds its key reads one cache
   // line. `first` serves the parallel kernel's bids (kNobody between rounds).
   struct Slot {
-    std::uint64_t key = 0; // 0: empty
-    VertexId value = kNoVertex;
-    std::uint32_t first = kNobody;
+    std::uint64_t key; // 0: empty
+    VertexId value;
+    std::uint32_t first;
   };
+  // claim()'s probe; kNoSlot when inserting k would take the keys, with
+  // every thread's unused credits, past limit_.
+  std::uint32_t claim_slot(std::uint64_t k, std::size_t &credits) {
+    constexpr std::size_t kBatch = 256;
+    for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
+      std::atomic_ref<std::uint64_t> key(slots_[i].key);
+      std::uint64_t seen = key.load(std::memory_order_acquire);
+      if (seen == 0) {
+        if (credits == 0) {
+          std::atomic_ref<std::size_t> keys(keys_);
+          if (keys.fetch_add(kBatch, std::memory_order_relaxed) + kBatch > limit_)
+            return kNoSlot;
+          credits = kBatch;
+        }
+        if (key.compare_exchange_strong(seen, k, std::memory_order_acq_rel)) {
+          --credits;
+          return std::uint32_t(i);
+        }
+      }
+      if (seen == k)
+        return std::uint32_t(i);
+    }
+  }
   std::size_t slot(std::uint64_t k) const {
     return std::size_t((k * 0x9E3779B97F4A7C15ull) >> 20) & mask_;
   }
   std::size_t filter_bit(std::uint64_t k) const {
     return std::size_t((k * 0xC2B2AE3D27D4EB4Full) >> 24) & filter_mask_;
   }
+  // Twice the slots, filled and rehashed by all threads when it is large
+  // (the tables of the last iterations are; filling and rehashing them on
+  // one thread was a tenth of the refinement on two). The keys are distinct,
+  // so where each lands does not depend on the threads, and the filter
+  // already holds them.
   void grow() {
-    std::vector<Slot> old = std::move(slots_);
-    slots_.assign(std::max<std::size_t>(1024, old.size() * 2), Slot{});
-    mask_ = slots_.size() - 1;
-    size_ = 0;
-    for (const Slot &e : old)
-      if (e.key)
-        insert(e.key, e.value);
+    std::unique_ptr<Slot[]> old = std::move(slots_);
+    const std::size_t old_capacity = capacity_;
+    capacity_ = std::max<std::size_t>(1024, 2 * old_capacity);
+    mask_ = capacity_ - 1;
+    slots_ = std::make_unique_for_overwrite<Slot[]>(capacity_);
+    const int workers = capacity_ >= (std::size_t(1) << 16) ? threads() : 1;
+    std::size_t keys = 0;
+#pragma omp parallel num_threads(workers)
+    {
+#pragma omp for schedule(static)
+      for (std::size_t i = 0; i < capacity_; ++i)
+        slots_[i] = Slot{0, kNoVertex, kNobody};
+#pragma omp for schedule(static) reduction(+ : keys)
+      for (std::size_t j = 0; j < old_capacity; ++j)
+        if (old[j].key) {
+          slots_[rehash(old[j].key)].value = old[j].value;
+          ++keys;
+        }
+    }
+    keys_ = keys; // without a failed round's unused credits
   }
-  std::vector<Slot> slots_;
+  // grow()'s insert of a key known to be absent.
+  std::uint32_t rehash(std::uint64_t k) {
+    for (std::size_t i = slot(k);; i = (i + 1) & mask_) {
+      std::atomic_ref<std::uint64_t> key(slots_[i].key);
+      std::uint64_t seen = 0;
+      if (key.load(std::memory_order_relaxed) == 0 &&
+          key.compare_exchange_strong(seen, k, std::memory_order_relaxed))
+        return std::uint32_t(i);
+    }
+  }
+  std::unique_ptr<Slot[]> slots_;
+  std::size_t capacity_ = 0;
+  std::size_t keys_ = 0;  // slots with a key: size_ and the claims of a round
+  std::size_t limit_ = 0; // claim() inserts no key past this many
+  bool overflow_ = false;
   std::vector<std::uint64_t> filter_; // expect()
   std::size_t filter_mask_ = 0;
   std::size_t size_ = 0, mask_ = 0;
@@ -218,9 +305,8 @@ public:
     if (logging_)
       logged_.assign((nc0_ + 63) / 64, 0);
     try {
-      std::vector<std::uint64_t> flag; // per vertex: an end of an edge bisected in this pass
-      std::vector<std::uint64_t> seen;
-      std::vector<CellId> candidates;
+      std::vector<std::uint64_t> flag;     // per vertex: an end of an edge bisected in this pass
+      std::vector<std::uint64_t> bisected; // per cell: bisected in this pass
       std::vector<std::vector<CellId>> found;
       if (!split.empty())
         add_split_edges(split, work, found);
@@ -240,22 +326,14 @@ public:
         result.kernel_seconds +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         result.bisections += work.size();
-        // Candidates for the next pass: the children just made, and every cell
-        // holding both ends of an edge bisected in this pass (ALGORITHMS §6).
-        // A bit per cell keeps each candidate once.
-        seen.assign((m_.num_cells() + 63) / 64, 0);
-        candidates.clear();
-        auto add = [&](std::size_t c) {
-          std::uint64_t bit = std::uint64_t(1) << (c & 63);
-          if (!(seen[c >> 6] & bit)) {
-            seen[c >> 6] |= bit;
-            candidates.push_back(CellId(c));
-          }
-        };
-        for (CellId c : work)
-          add(c);
-        for (std::size_t c = cells_before; c < m_.num_cells(); ++c)
-          add(c);
+        // The next pass: the cells with a bisected edge among those that can
+        // have one, the cells just bisected (in their first child's slot),
+        // the children just made, and every cell holding both ends of an
+        // edge bisected in this pass (ALGORITHMS §6). One test per block of
+        // cells on all threads, in cell order, so the order does not depend
+        // on the threads; nothing serial but marking the pass's cells and
+        // the ends of its edges (the candidates were gathered and deduplicated
+        // on one thread: 3D ball, two threads, a twentieth of refine).
         if (m_.num_vertices() > verts_before) {
           // A bit per vertex: the scan below reads it for every cell of
           // every pass, and bits stay in cache where bytes did not (3D
@@ -266,27 +344,36 @@ public:
               const VertexId a = m_.parent_edge[2 * v + k];
               flag[a >> 6] |= std::uint64_t(1) << (a & 63);
             }
-          // The cells of each block found by one thread, taken in block
-          // order: the candidates' order does not depend on the threads.
+          bisected.assign((cells_before + 63) / 64, 0);
+          for (CellId c : work)
+            bisected[c >> 6] |= std::uint64_t(1) << (c & 63);
           for_blocks(cells_before, found, [&](std::size_t c) {
-            const VertexId *x = m_.cell(CellId(c));
-            int hits = 0;
-            for (int i = 0; i < N; ++i)
-              hits += int(flag[x[i] >> 6] >> (x[i] & 63) & 1);
-            return hits >= 2;
+            if (!(bisected[c >> 6] >> (c & 63) & 1)) {
+              const VertexId *x = m_.cell(CellId(c));
+              int hits = 0;
+              for (int i = 0; i < N; ++i)
+                hits += int(flag[x[i] >> 6] >> (x[i] & 63) & 1);
+              if (hits < 2)
+                return false;
+            }
+            return has_hanging_edge(CellId(c));
           });
-          for (const std::vector<CellId> &block : found)
-            for (CellId c : block)
-              add(c);
+          work.clear();
+        } else {
+          // No new midpoint: no cell but these has a new bisected edge.
+          for_blocks(work.size(), found, [&](std::size_t i) { return has_hanging_edge(work[i]); });
+          for (std::vector<CellId> &block : found)
+            for (CellId &i : block)
+              i = work[i];
+          work.clear();
         }
-        // Which candidates have a bisected edge: read-only lookups, by all
-        // threads, kept in candidate order.
-        work.clear();
-        for_blocks(candidates.size(), found,
-                   [&](std::size_t i) { return has_hanging_edge(candidates[i]); });
+        for (const std::vector<CellId> &block : found)
+          work.insert(work.end(), block.begin(), block.end());
+        for_blocks(m_.num_cells() - cells_before, found,
+                   [&](std::size_t i) { return has_hanging_edge(CellId(cells_before + i)); });
         for (const std::vector<CellId> &block : found)
           for (CellId i : block)
-            work.push_back(candidates[i]);
+            work.push_back(CellId(cells_before + i));
         if (!work.empty())
           ++result.closure_passes;
       }
@@ -522,9 +609,9 @@ private:
   // 1. Each cell finds its edge and claims the edge's slot in the midpoint
   //    table; for a slot without a value, the smallest claiming index wins.
   // 2. Blocks count their winners; prefix sums give each winner its id.
-  // 3. The tagged entities split, in work order on one thread (most cells
-  //    hold none: a look at two bytes); then each cell writes its children,
-  //    each winner its vertex.
+  // 3. The tagged entities split, in work order on one thread, at the edges
+  //    step 1 found may split one (most do not); then each cell writes its
+  //    children, each winner its vertex.
   // Errors are found first, in the order the serial loop would meet them,
   // and nothing is changed but the table when one is thrown.
   void bisect_all(const std::vector<CellId> &work) {
@@ -544,33 +631,50 @@ private:
       if (i < defect[b].first)
         defect[b] = {i, d};
     };
-    mids_.reserve(w);
-#pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
-    for (std::size_t b = 0; b < blocks; ++b)
-      for (std::size_t i = b * kBlock; i < std::min(w, (b + 1) * kBlock); ++i) {
-        const CellId c = work[i];
-        if (m_.generation[c] == std::numeric_limits<std::uint16_t>::max())
-          note(b, i, kGenerations);
-        if constexpr (Dim == 2)
-          if (m_.stage[c] != Stage::Maubach)
-            note(b, i, kStage);
-        pick[i] = refinement_pick(c);
-        const VertexId a = m_.cell(c)[pick[i].first], z = m_.cell(c)[pick[i].second];
-        ends[2 * i] = a;
-        ends[2 * i + 1] = z;
-        const std::uint32_t s = mids_.claim(MidpointMap::key(a, z));
-        slot[i] = s;
-        if (mids_.fresh(s))
-          mids_.bid(s, std::uint32_t(i));
+    // Per cell: kWon (its edge's midpoint is new and it is the first in
+    // work order to bisect that edge) and kSplits (its edge may split an
+    // entity, EntitySplitter::may_split).
+    constexpr std::uint8_t kWon = 1, kSplits = 2;
+    std::vector<std::uint8_t> flags(w);
+    mids_.begin_round(w);
+    for (;;) {
+#pragma omp parallel num_threads(workers)
+      {
+        std::size_t credits = 0; // MidpointMap::claim
+#pragma omp for schedule(dynamic, 1)
+        for (std::size_t b = 0; b < blocks; ++b)
+          for (std::size_t i = b * kBlock; i < std::min(w, (b + 1) * kBlock); ++i) {
+            const CellId c = work[i];
+            if (m_.generation[c] == std::numeric_limits<std::uint16_t>::max())
+              note(b, i, kGenerations);
+            if constexpr (Dim == 2)
+              if (m_.stage[c] != Stage::Maubach)
+                note(b, i, kStage);
+            pick[i] = refinement_pick(c);
+            const VertexId a = m_.cell(c)[pick[i].first], z = m_.cell(c)[pick[i].second];
+            ends[2 * i] = a;
+            ends[2 * i + 1] = z;
+            const std::uint32_t s = mids_.claim(MidpointMap::key(a, z), credits);
+            if (s == MidpointMap::kNoSlot)
+              continue; // the round overflowed: claimed again below
+            slot[i] = s;
+            if (mids_.fresh(s))
+              mids_.bid(s, std::uint32_t(i));
+            flags[i] = splitter_ && splitter_->may_split(a, z) ? kSplits : 0;
+          }
       }
-    // 2. The winners (a byte each: settle() below forgets the bids) and
+      if (!mids_.overflowed())
+        break;
+      mids_.retry_round(w);
+    }
+    // 2. The winners (a bit in flags: settle() below forgets the bids) and
     // their ids, which depend on the blocks' order only.
-    std::vector<std::uint8_t> won(w);
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
     for (std::size_t b = 0; b < blocks; ++b)
       for (std::size_t i = b * kBlock; i < std::min(w, (b + 1) * kBlock); ++i) {
-        won[i] = mids_.fresh(slot[i]) && mids_.first_bidder(slot[i]) == std::uint32_t(i);
-        winners[b + 1] += won[i];
+        const bool won = mids_.fresh(slot[i]) && mids_.first_bidder(slot[i]) == std::uint32_t(i);
+        flags[i] |= won ? kWon : 0;
+        winners[b + 1] += won;
       }
     for (std::size_t b = 0; b < blocks; ++b)
       winners[b + 1] += winners[b];
@@ -579,7 +683,7 @@ private:
     for (std::size_t b = 0; b < blocks; ++b) {
       std::size_t next = nv + winners[b];
       for (std::size_t i = b * kBlock; i < std::min(w, (b + 1) * kBlock); ++i)
-        if (won[i]) {
+        if (flags[i] & kWon) {
           if (next + 1 > limits_.max_vertices)
             note(b, i, kIds);
           else if (!(resolution({ends[2 * i], ends[2 * i + 1]}) >= 1))
@@ -587,7 +691,7 @@ private:
           mids_.settle(slot[i], VertexId(next++));
         }
     }
-    mids_.add_size(made);
+    mids_.end_round(made);
     for (const auto &[i, d] : defect) // blocks in order: the first in work order
       switch (d) {
       case kNone:
@@ -614,12 +718,13 @@ private:
     origin_.resize(nc + w - nc0_);
     if (splitter_)
       for (std::size_t i = 0; i < w; ++i)
-        splitter_->split(m_.cell(work[i]), N, ends[2 * i], ends[2 * i + 1], mids_.value(slot[i]));
+        if (flags[i] & kSplits)
+          splitter_->split(m_.cell(work[i]), N, ends[2 * i], ends[2 * i + 1], mids_.value(slot[i]));
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
     for (std::size_t b = 0; b < blocks; ++b)
       for (std::size_t i = b * kBlock; i < std::min(w, (b + 1) * kBlock); ++i) {
         const VertexId z = mids_.value(slot[i]);
-        if (won[i]) {
+        if (flags[i] & kWon) {
           const VertexId a = ends[2 * i], e = ends[2 * i + 1];
           const double *p = m_.point(a), *q = m_.point(e);
           double *mid = m_.coords.data() + std::size_t(z) * Dim;
@@ -787,11 +892,26 @@ RefineResult refine_uniform(Mesh &mesh) {
 namespace bisect::testing {
 namespace {
 std::atomic<int> g_parallel_bisection{0};
-}
+std::atomic<int> g_midpoint_room{0};
+std::atomic<std::size_t> g_midpoint_retries{0};
+} // namespace
 void set_parallel_bisection(int mode) {
   g_parallel_bisection = mode;
 }
 int parallel_bisection() {
   return g_parallel_bisection;
+}
+void set_midpoint_room(int k) {
+  g_midpoint_room = k;
+  g_midpoint_retries = 0;
+}
+int midpoint_room() {
+  return g_midpoint_room;
+}
+void count_midpoint_retry() {
+  ++g_midpoint_retries;
+}
+std::size_t midpoint_retries() {
+  return g_midpoint_retries;
 }
 } // namespace bisect::testing

@@ -1,6 +1,8 @@
 // Test hooks of the refinement kernel (not part of the installed API).
 #pragma once
 
+#include <cstddef>
+
 namespace bisect::testing {
 
 // Which passes of refine-to-conformity bisect their cells on all threads
@@ -9,5 +11,12 @@ namespace bisect::testing {
 // The result must be the same bit for bit, which a test checks.
 void set_parallel_bisection(int mode);
 int parallel_bisection();
+
+// The room a parallel pass makes in the midpoint table for the edges it
+// bisects (MidpointMap::begin_round): 0 (the default) for half its cells,
+// k > 0 for 1/k of them, so that passes overflow the table and claim their
+// edges again (counted by midpoint_retries()). The result must not change.
+void set_midpoint_room(int k);
+std::size_t midpoint_retries();
 
 } // namespace bisect::testing
