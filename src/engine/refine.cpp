@@ -22,10 +22,12 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
+#include <type_traits>
 
 namespace bisect {
 
@@ -347,16 +349,19 @@ public:
           bisected.assign((cells_before + 63) / 64, 0);
           for (CellId c : work)
             bisected[c >> 6] |= std::uint64_t(1) << (c & 63);
-          for_blocks(cells_before, found, [&](std::size_t c) {
-            if (!(bisected[c >> 6] >> (c & 63) & 1)) {
-              const VertexId *x = m_.cell(CellId(c));
-              int hits = 0;
-              for (int i = 0; i < N; ++i)
-                hits += int(flag[x[i] >> 6] >> (x[i] & 63) & 1);
-              if (hits < 2)
-                return false;
-            }
-            return has_hanging_edge(CellId(c));
+          const VertexId *cells = m_.cells.data();
+          const std::uint64_t *ends_flag = flag.data(), *was_bisected = bisected.data();
+          for_blocks(cells_before, found, [this, cells, ends_flag, was_bisected](std::size_t c) {
+            const VertexId *x = cells + c * N;
+            if (was_bisected[c >> 6] >> (c & 63) & 1)
+              return has_hanging_edge(x);
+            // A cell this pass did not bisect had no bisected edge before
+            // it (else the pass would have bisected it): only an edge with
+            // both ends flagged can have a midpoint.
+            unsigned ends = 0;
+            for (int i = 0; i < N; ++i)
+              ends |= unsigned(ends_flag[x[i] >> 6] >> (x[i] & 63) & 1) << i;
+            return has_midpoint_among(x, ends);
           });
           work.clear();
         } else {
@@ -369,8 +374,9 @@ public:
         }
         for (const std::vector<CellId> &block : found)
           work.insert(work.end(), block.begin(), block.end());
+        const VertexId *children = m_.cells.data() + cells_before * N;
         for_blocks(m_.num_cells() - cells_before, found,
-                   [&](std::size_t i) { return has_hanging_edge(CellId(cells_before + i)); });
+                   [this, children](std::size_t i) { return has_hanging_edge(children + i * N); });
         for (const std::vector<CellId> &block : found)
           for (CellId i : block)
             work.push_back(CellId(cells_before + i));
@@ -450,10 +456,15 @@ private:
     const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
     for (std::size_t k = 0; k < blocks; ++k) {
-      found[k].clear();
+      // A copy of the test on this thread's stack: what it holds stays in
+      // registers across the push_back()s (a scan of every cell per pass
+      // reloaded the mesh's pointers for every cell).
+      std::remove_cvref_t<Test> local = test;
+      std::vector<CellId> &out = found[k];
+      out.clear();
       for (std::size_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i)
-        if (test(i))
-          found[k].push_back(CellId(i));
+        if (local(i))
+          out.push_back(CellId(i));
     }
   }
 
@@ -483,11 +494,26 @@ private:
   }
 
   bool has_hanging_edge(CellId c) const {
-    const VertexId *x = m_.cell(c);
-    for (const LocalEdge &e : kLocalEdges<Dim>)
-      if (endpoint_[x[e.first]] && endpoint_[x[e.second]] &&
-          mids_.find(MidpointMap::key(x[e.first], x[e.second])) != kNoVertex)
-        return true;
+    return has_hanging_edge(m_.cells.data() + std::size_t(c) * N);
+  }
+  // The same for the cell whose ids start at x.
+  bool has_hanging_edge(const VertexId *x) const {
+    const std::uint8_t *endpoint = endpoint_.data();
+    unsigned ends = 0;
+    for (int i = 0; i < N; ++i)
+      ends |= unsigned(endpoint[x[i]] != 0) << i;
+    return has_midpoint_among(x, ends);
+  }
+  // Whether an edge of x between two vertices of the set `ends` (bit i:
+  // x[i]) has a midpoint: the pairs of set bits, without a table of edges
+  // (ends has two or three bits set, or none, in most cells asked).
+  bool has_midpoint_among(const VertexId *x, unsigned ends) const {
+    for (unsigned a = ends; a & (a - 1); a &= a - 1) {
+      const VertexId p = x[std::countr_zero(a)];
+      for (unsigned b = a & (a - 1); b; b &= b - 1)
+        if (mids_.find(MidpointMap::key(p, x[std::countr_zero(b)])) != kNoVertex)
+          return true;
+    }
     return false;
   }
 
