@@ -99,9 +99,9 @@ public:
   }
   // The parallel kernel's side (Refiner::bisect_all). A round of `more`
   // claims inserts at most `more` keys but usually far fewer (a new edge is
-  // bisected by every cell of the pass around it: 3D ball, 0.45 new keys
-  // per claim), so room is made for half of them at a load of 0.6, and
-  // claim() stops inserting at 3/4 of the slots; the round then finds
+  // bisected by every cell of the pass around it: 3D ball, 12 iterations,
+  // the last made 238,000 midpoints for 529,000 selected cells), so room is made for half of them
+  // at a load of 0.6, and claim() stops inserting at 3/4 of the slots; the round then finds
   // overflowed() set, grows the table and claims again. The table is never
   // full, so every probe ends. Room for all `more` at a load of 1/2 made
   // the last iteration's table 4 times the size the serial kernel's
