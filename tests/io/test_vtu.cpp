@@ -6,6 +6,7 @@
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
 #include "bisect/state.hpp"
+#include "bisect/threads.hpp"
 #include "support.hpp"
 
 #include <catch2/catch.hpp>
@@ -240,6 +241,50 @@ TEST_CASE("vtu: written file is zlib-compressed inline binary with 64-bit header
   // Ids and offsets as Int32 while they fit (always, below 2^31 ids).
   CHECK(text.find("type=\"Int32\" Name=\"connectivity\"") != std::string::npos);
   CHECK(text.find("type=\"Int32\" Name=\"offsets\"") != std::string::npos);
+}
+
+TEST_CASE("vtu: an array deflate barely shrinks is stored in zlib's format, and reads back exactly",
+          "[io][3d]") {
+  // 41^3 vertices: each point array spans several 32 KiB blocks. "noise"
+  // holds values in [0, 1) like a refined mesh's coordinates (deflate makes
+  // them about 0.95 of their size): its blocks after the first of each group
+  // are stored, so the array's text is about as long as its raw bytes in
+  // base64 (all but a tenth of the first block's). "smooth" compresses well
+  // and stays compressed.
+  TempDir dir;
+  Mesh m = generate_kuhn(3, 40);
+  const std::size_t nv = m.num_vertices();
+  std::vector<double> noise(nv), smooth(nv);
+  std::uint64_t s = 88172645463325252ull;
+  for (std::size_t i = 0; i < nv; ++i) {
+    s ^= s << 13;
+    s ^= s >> 7;
+    s ^= s << 17;
+    noise[i] = double(s >> 11) * 0x1p-53;
+    smooth[i] = double(i % 7);
+  }
+  m.point_data.push_back({"noise", 1, noise});
+  m.point_data.push_back({"smooth", 1, smooth});
+  for (int threads : {1, 2}) {
+    INFO("threads " << threads);
+    set_threads(threads);
+    WriteOptions options;
+    options.compression = Compression::Zlib;
+    write_mesh(dir.file("m" + std::to_string(threads) + ".vtu"), m, options);
+  }
+  set_threads(0);
+  const std::string text = read_text(dir.file("m1.vtu"));
+  CHECK(text == read_text(dir.file("m2.vtu")));
+  auto encoded_length = [&](const std::string &name) {
+    const std::size_t at = text.find("Name=\"" + name + "\"");
+    REQUIRE(at != std::string::npos);
+    const std::size_t from = text.find('>', at) + 1;
+    return text.find('<', from) - from;
+  };
+  CHECK(double(encoded_length("noise")) >= 4.0 / 3.0 * (double(nv * sizeof(double)) - 3276.8));
+  CHECK(double(encoded_length("smooth")) < 0.2 * double(nv * sizeof(double)));
+  const Mesh back = read_mesh(dir.file("m1.vtu"));
+  require_same(m, back);
 }
 
 TEST_CASE("vtu: lower-dimensional cells are tagged entities with their cell data; unused points "
