@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -34,6 +35,15 @@ struct DriverOptions {
   // iteration's quality pass also takes the final check's cell facts
   // (quality_with_cell_facts), and the check does not walk the cells again.
   bool on_iteration_changes_mesh = true;
+  // When set, each selection after the first is select_among(mesh,
+  // candidates) instead of select(mesh): `candidates` has a bit per cell
+  // (bit c % 64 of word c / 64), set for the cells that descend from a cell
+  // the previous iteration selected. For a selection that cannot pick any
+  // other cell, such as a monotone region's (Region::monotone, select_cells
+  // with candidates), the result is the same and only those cells are
+  // looked at. Not used with depth > 1, nor when on_iteration may change the
+  // mesh.
+  std::function<std::vector<CellId>(const Mesh &, const std::vector<std::uint64_t> &)> select_among;
 };
 
 // One finished iteration.

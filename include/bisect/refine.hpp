@@ -29,6 +29,11 @@ struct RefineLimits {
   std::size_t max_vertices = std::numeric_limits<VertexId>::max() - 1;
   // Checked between passes; when set, the iteration is undone (Ctrl-C).
   const std::atomic<bool> *cancel = nullptr;
+  // Not a limit: when given, receives for every cell the call appends (ids
+  // from the input's cell count on, in order) the input cell it descends
+  // from; an input cell's id is its first child's. Empty when the call was
+  // undone. (The driver narrows the next selection with it.)
+  std::vector<CellId> *origin = nullptr;
 };
 
 struct RefineResult {

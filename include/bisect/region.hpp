@@ -8,6 +8,7 @@
 #include "bisect/mesh.hpp"
 
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -42,6 +43,15 @@ public:
   // splits the cells among them; the selection is the same either way). The
   // default is no, for regions that keep state or call back into Python.
   virtual bool concurrent() const { return false; }
+  // Whether a simplex that touches the region always lies in one that does
+  // among the cells it was bisected from, and filter() keeps every cell: an
+  // exact touches() of a region that stays put (sphere, hemisphere, box,
+  // halfspace, moving sphere, and unions and intersections of them). Then
+  // every cell an iteration could select descends from a cell the previous
+  // one selected, and the driver tests only those (select_cells with
+  // candidates; 3D ball, 12 iterations: a fifth of the cells in the last).
+  // The default is no (the levelset region samples, and its filter ranks).
+  virtual bool monotone() const { return false; }
 };
 
 // Parses a region spec for a mesh of dimension `dim`. `origin` names where the
@@ -53,8 +63,14 @@ std::unique_ptr<Region> read_region(const std::string &path, int dim);
 
 // The cells whose closed simplex touches the region, then region.filter().
 std::vector<CellId> select_cells(const Mesh &mesh, const Region &region);
-// The cells whose closed simplex touches the region, without the filter.
-std::vector<CellId> select_touching(const Mesh &mesh, const Region &region);
+// The same among `candidates` only (a bit per cell, bit c % 64 of word
+// c / 64; cells past its end are not candidates).
+std::vector<CellId> select_cells(const Mesh &mesh, const Region &region,
+                                 const std::vector<std::uint64_t> &candidates);
+// The cells whose closed simplex touches the region, without the filter;
+// among `candidates` when given.
+std::vector<CellId> select_touching(const Mesh &mesh, const Region &region,
+                                    const std::vector<std::uint64_t> *candidates = nullptr);
 // The order of cells by their vertices' coordinates: each cell's vertices
 // sorted lexicographically, then the two lists compared lexicographically
 // (the same for every numbering of the cells and vertices).

@@ -2,6 +2,7 @@
 // callers run between reading and writing.
 #include "bisect/driver.hpp"
 #include "bisect/text.hpp"
+#include "bisect/threads.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -33,6 +34,31 @@ double available_bytes() {
 
 // The temporary cell array refine_marked tags descendants with.
 constexpr const char *kAncestorVolume = "bisect:ancestor_volume";
+
+// A bit per cell of the refined mesh, set for the cells that descend from
+// `selected` (ids below `cells_before`; `origin` as RefineLimits::origin
+// gives it): an input cell's slot holds its first child.
+std::vector<std::uint64_t> descendants(const std::vector<CellId> &selected,
+                                       std::size_t cells_before,
+                                       const std::vector<CellId> &origin) {
+  std::vector<std::uint64_t> was((cells_before + 63) / 64, 0);
+  for (CellId c : selected)
+    was[c >> 6] |= std::uint64_t(1) << (c & 63);
+  const std::size_t nc = cells_before + origin.size(), words = (nc + 63) / 64;
+  std::vector<std::uint64_t> out(was);
+  out.resize(words, 0);
+  const std::size_t first = cells_before / 64;
+#pragma omp parallel for num_threads(threads()) schedule(static) if (words - first > (1u << 14))
+  for (std::size_t w = first; w < words; ++w) {
+    std::uint64_t bits = 0;
+    for (std::size_t c = std::max(w * 64, cells_before); c < std::min(nc, w * 64 + 64); ++c) {
+      const CellId a = origin[c - cells_before];
+      bits |= (was[a >> 6] >> (a & 63) & 1) << (c & 63);
+    }
+    out[w] |= bits;
+  }
+  return out;
+}
 
 } // namespace
 
@@ -76,13 +102,24 @@ run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
   const bool final_check = options.final_check && !options.check_every_iteration;
   const bool fuse = final_check && (!on_iteration || !options.on_iteration_changes_mesh);
   CellFacts facts;
+  // The cells the next selection may pick (DriverOptions::select_among).
+  const bool narrow = options.select_among && options.depth <= 1 &&
+                      (!on_iteration || !options.on_iteration_changes_mesh);
+  std::vector<std::uint64_t> candidates;
+  bool have_candidates = false;
+  std::vector<CellId> origin;
+  if (narrow)
+    limits.origin = &origin;
   for (int it = 1; it <= options.iterations; ++it) {
     if (options.cancel && options.cancel->load()) {
       result.stop = StopReason::Cancelled;
       break;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    const std::vector<CellId> selected = select(mesh);
+    const std::vector<CellId> selected =
+        have_candidates ? options.select_among(mesh, candidates) : select(mesh);
+    std::vector<std::uint64_t>().swap(candidates);
+    have_candidates = false;
     result.select_seconds += seconds_since(t0);
     if (std::string why = memory_shortfall(mesh, selected.size(), options.max_memory_gib);
         !why.empty()) {
@@ -94,8 +131,15 @@ run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
     report.iteration = it;
     report.first_new_vertex = mesh.num_vertices();
     const auto t_refine = std::chrono::steady_clock::now();
+    const std::size_t cells_before = mesh.num_cells();
     const RefineResult r = options.depth > 1 ? refine_marked(mesh, selected, options.depth, limits)
                                              : refine(mesh, selected, limits);
+    if (narrow && !r.limit_reached && !r.cancelled &&
+        origin.size() + cells_before == mesh.num_cells()) {
+      candidates = descendants(selected, cells_before, origin);
+      have_candidates = true;
+    }
+    std::vector<CellId>().swap(origin);
     result.refine_seconds += seconds_since(t_refine);
     if (r.cancelled) {
       result.stop = StopReason::Cancelled;

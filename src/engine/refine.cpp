@@ -296,6 +296,8 @@ public:
                    const std::vector<std::array<VertexId, 2>> &split = {}) {
     RefineResult result;
     result.selected = work.size();
+    if (limits_.origin)
+      limits_.origin->clear();
     // Closure bisects cells about as coarse as the selected ones or coarser;
     // when a selected cell's edge is near the precision limit, keep the undo
     // log so that passing it anywhere undoes the iteration.
@@ -397,6 +399,8 @@ public:
       return result;
     }
     finish();
+    if (limits_.origin)
+      *limits_.origin = std::move(origin_);
     return result;
   }
 

@@ -350,6 +350,7 @@ template <int D> bool simplex_meets_box(const double *verts, const double *lo, c
 template <int D> class SphereRegion final : public Region {
 public:
   bool concurrent() const override { return true; }
+  bool monotone() const override { return true; }
   SphereRegion(const std::vector<double> &c, double r, bool solid) : r_(r), solid_(solid) {
     std::copy(c.begin(), c.end(), c_);
     r2lo_ = r * r * (1 - kRadiusSlack);
@@ -375,6 +376,7 @@ private:
 template <int D> class HemisphereRegion final : public Region {
 public:
   bool concurrent() const override { return true; }
+  bool monotone() const override { return true; }
   HemisphereRegion(const std::vector<double> &c, double r, const std::vector<double> &n,
                    double offset)
       : r_(r), offset_(offset) {
@@ -443,6 +445,7 @@ private:
 template <int D> class BoxRegion final : public Region {
 public:
   bool concurrent() const override { return true; }
+  bool monotone() const override { return true; }
   BoxRegion(const std::vector<double> &lo, const std::vector<double> &hi) {
     std::copy(lo.begin(), lo.end(), lo_);
     std::copy(hi.begin(), hi.end(), hi_);
@@ -474,6 +477,7 @@ private:
 template <int D> class HalfspaceRegion final : public Region {
 public:
   bool concurrent() const override { return true; }
+  bool monotone() const override { return true; }
   HalfspaceRegion(const std::vector<double> &n, double offset) : offset_(offset) {
     std::copy(n.begin(), n.end(), n_);
   }
@@ -508,6 +512,7 @@ template <int D> class MovingSphereRegion final : public Region {
   static constexpr int M = D - 1; // space dimensions
 public:
   bool concurrent() const override { return true; }
+  bool monotone() const override { return true; }
   MovingSphereRegion(const std::vector<double> &c, const std::vector<double> &v, double r,
                      bool solid)
       : r_(r), solid_(solid) {
@@ -546,6 +551,11 @@ public:
   bool concurrent() const override {
     return std::all_of(members_.begin(), members_.end(),
                        [](const auto &m) { return m->concurrent(); });
+  }
+  // An intersection too: a cell every member touches lies in cells they all do.
+  bool monotone() const override {
+    return std::all_of(members_.begin(), members_.end(),
+                       [](const auto &m) { return m->monotone(); });
   }
   SetRegion(std::vector<std::unique_ptr<Region>> members, int dim, bool all)
       : members_(std::move(members)), all_(all) {

@@ -4,12 +4,20 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 
 namespace bisect {
 
 std::vector<CellId> select_cells(const Mesh &mesh, const Region &region) {
   std::vector<CellId> out = select_touching(mesh, region);
   region.filter(mesh, out); // e.g. the levelset indicator keeps a fraction
+  return out;
+}
+
+std::vector<CellId> select_cells(const Mesh &mesh, const Region &region,
+                                 const std::vector<std::uint64_t> &candidates) {
+  std::vector<CellId> out = select_touching(mesh, region, &candidates);
+  region.filter(mesh, out);
   return out;
 }
 
@@ -39,7 +47,8 @@ bool cell_coordinates_less(const Mesh &mesh, CellId a, CellId b) {
                                       y.begin() + std::ptrdiff_t(k));
 }
 
-std::vector<CellId> select_touching(const Mesh &mesh, const Region &region) {
+std::vector<CellId> select_touching(const Mesh &mesh, const Region &region,
+                                    const std::vector<std::uint64_t> *candidates) {
   const int dim = mesh.dim, nv = dim + 1;
   double lo[4], hi[4];
   region.bounds(lo, hi, dim);
@@ -54,6 +63,19 @@ std::vector<CellId> select_touching(const Mesh &mesh, const Region &region) {
   for (std::size_t k = 0; k < blocks; ++k) {
     double pts[5 * 4];
     for (std::size_t c = k * kBlock; c < std::min(nc, (k + 1) * kBlock); ++c) {
+      if (candidates) {
+        const std::size_t w = c >> 6;
+        if (w >= candidates->size())
+          break;
+        const std::uint64_t bits = (*candidates)[w] >> (c & 63);
+        if (!bits) { // no candidate left in this word
+          c |= 63;
+          continue;
+        }
+        c += std::size_t(std::countr_zero(bits)); // the next candidate
+        if (c >= std::min(nc, (k + 1) * kBlock))
+          break;
+      }
       const VertexId *x = mesh.cell(CellId(c));
       bool outside = false;
       for (int d = 0; d < dim && !outside; ++d) {

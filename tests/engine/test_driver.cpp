@@ -3,9 +3,12 @@
 #include "bisect/error.hpp"
 #include "bisect/generate.hpp"
 #include "bisect/mark.hpp"
+#include "bisect/region.hpp"
 
 #include <catch2/catch.hpp>
 
+#include <bit>
+#include <string>
 #include <vector>
 
 using namespace bisect;
@@ -80,4 +83,96 @@ TEST_CASE("driver: a callback that may change the mesh is checked after it: a ce
     };
     CHECK_THROWS_AS(run_iterations(m, corner, options, flattens), CheckError);
   }
+}
+
+TEST_CASE("driver: a monotone region's selection among the previous one's descendants is the "
+          "full selection, and looks at fewer cells",
+          "[driver][region][2d][3d][4d]") {
+  // Every region type that says it is monotone, in every dimension it
+  // exists in: at each iteration after the first, select_among gets the
+  // candidates; the test compares its selection with a full select_cells of
+  // the same mesh, and the final meshes with and without narrowing.
+  const std::vector<std::string> specs = {
+      R"({"type": "sphere", "center": [0.4, 0.45, 0.5, 0.55], "radius": 0.3})",
+      R"({"type": "sphere", "center": [0.4, 0.45, 0.5, 0.55], "radius": 0.2, "solid": true})",
+      R"({"type": "hemisphere", "center": [0.5, 0.5, 0.5, 0.5], "radius": 0.35,
+          "normal": [1, 0.5, 0, 0], "offset": 0.6})",
+      R"({"type": "box", "min": [0.1, 0.2, 0.3, 0.1], "max": [0.3, 0.5, 0.45, 0.6]})",
+      R"({"type": "halfspace", "normal": [1, 1, 1, 1], "offset": OFFSET})",
+      R"({"type": "moving_sphere", "center": [0.2, 0.3, 0.2], "velocity": [0.5, 0.1, 0.2],
+          "radius": 0.15})",
+      R"({"type": "union", "regions": [
+          {"type": "sphere", "center": [0.2, 0.2, 0.2, 0.2], "radius": 0.1},
+          {"type": "intersection", "regions": [
+            {"type": "box", "min": [0.4, 0.4, 0.4, 0.4], "max": [0.9, 0.9, 0.9, 0.9]},
+            {"type": "halfspace", "normal": [1, -1, 0, 0], "offset": 0.05}]}]})",
+  };
+  for (int dim : {2, 3, 4}) {
+    for (const std::string &spec : specs) {
+      // Each list of coordinates cut to the dimension (a moving sphere's
+      // centre and velocity have one fewer: it needs 3D or 4D space-time),
+      // the halfspace's offset where it cuts a corner off the unit cube.
+      const bool moving = spec.find("moving_sphere") != std::string::npos;
+      if (moving && dim == 2)
+        continue;
+      std::string text;
+      for (std::size_t i = 0; i < spec.size();) {
+        if (spec[i] != '[' || spec[spec.find_first_not_of(" \n", i + 1)] == '{') {
+          text += spec[i++];
+          continue;
+        }
+        const std::size_t end = spec.find(']', i);
+        std::vector<std::string> items;
+        std::string item;
+        for (std::size_t j = i + 1; j < end; ++j)
+          if (spec[j] == ',') {
+            items.push_back(item);
+            item.clear();
+          } else if (spec[j] != ' ') {
+            item += spec[j];
+          }
+        items.push_back(item);
+        items.resize(std::size_t(moving ? dim - 1 : dim));
+        text += '[';
+        for (std::size_t k = 0; k < items.size(); ++k)
+          text += (k ? "," : "") + items[k];
+        text += ']';
+        i = end + 1;
+      }
+      if (const std::size_t at = text.find("OFFSET"); at != std::string::npos)
+        text.replace(at, 6, std::to_string(0.7 * dim));
+      INFO("dim " << dim << ", region " << text);
+      const std::unique_ptr<Region> region = parse_region(text, dim, "test");
+      REQUIRE(region->monotone());
+      const Mesh start = marked_kuhn(dim);
+      DriverOptions options;
+      options.iterations = dim == 4 ? 4 : 7;
+      Mesh full = start;
+      run_iterations(full, region_selector(*region), options);
+      Mesh narrowed = start;
+      int narrowed_calls = 0;
+      std::size_t looked = 0, cells = 0;
+      options.select_among = [&](const Mesh &m, const std::vector<std::uint64_t> &candidates) {
+        ++narrowed_calls;
+        std::vector<CellId> among = select_cells(m, *region, candidates);
+        const bool same = among == select_cells(m, *region);
+        CHECK(same);
+        for (std::uint64_t w : candidates)
+          looked += std::size_t(std::popcount(w));
+        cells += m.num_cells();
+        return among;
+      };
+      const DriverResult r = run_iterations(narrowed, region_selector(*region), options);
+      CHECK(r.iterations == options.iterations);
+      CHECK(narrowed_calls == options.iterations - 1);
+      CHECK(looked < cells);
+      const bool same_mesh = narrowed.cells == full.cells && narrowed.coords == full.coords;
+      CHECK(same_mesh);
+    }
+  }
+  // The level-set region samples its function: not monotone.
+  const std::unique_ptr<Region> levelset = parse_region(
+      R"({"type": "levelset", "variables": ["x", "y"], "expression": "x*x + y*y", "value": 0.2})",
+      2, "test");
+  CHECK_FALSE(levelset->monotone());
 }
