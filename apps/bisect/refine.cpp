@@ -257,6 +257,9 @@ int run_refine(const RefineArgs &a) {
   write_options.compression = a.compression == "lz4"    ? Compression::Lz4
                               : a.compression == "none" ? Compression::None
                                                         : Compression::Zlib;
+  // The final check found every cell's orientation: the writer need not.
+  if (!result.orientation.empty())
+    write_options.orientation = &result.orientation;
   write_output_mesh(outputs, h_mesh, mesh, write_options);
   std::string slice_lines;
   for (std::size_t i = 0; i < a.slices.size(); ++i)

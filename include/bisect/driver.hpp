@@ -75,6 +75,10 @@ struct DriverResult {
     return stop == StopReason::CellLimit || stop == StopReason::MemoryLimit ||
            stop == StopReason::PrecisionLimit;
   }
+  // Each final cell's orientation (+1, -1; CellFacts::signs) when the final
+  // check took it from the last quality pass, else empty: for
+  // WriteOptions::orientation.
+  std::vector<std::int8_t> orientation;
   // Wall seconds by stage.
   double select_seconds = 0, refine_seconds = 0, quality_seconds = 0, check_seconds = 0;
 };

@@ -5,7 +5,9 @@
 #include "bisect/check.hpp"
 #include "bisect/mesh.hpp"
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 namespace bisect {
 
@@ -23,6 +25,11 @@ enum class Compression { None, Zlib, Lz4 };
 struct WriteOptions {
   std::string format;                          // "vtu" or "msh"; empty: by the name's extension
   Compression compression = Compression::Zlib; // .vtu arrays (ParaView reads all three)
+  // The sign of every cell's volume (+1, -1) in the mesh as it is written,
+  // when the caller knows them (DriverResult::orientation): a marked .vtu
+  // then orients its cells by them instead of computing every cell's volume
+  // again. Ignored unless it has a value per cell.
+  const std::vector<std::int8_t> *orientation = nullptr;
 };
 
 // Writes `mesh` as given (cells in their stored vertex order) to `path`,

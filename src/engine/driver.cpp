@@ -205,6 +205,8 @@ run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
     result.check_seconds += seconds_since(t_check);
     if (!c.ok)
       throw CheckError("on the refined mesh: " + c.failure);
+    if (facts.describe(mesh))
+      result.orientation = std::move(facts.signs);
   }
   return result;
 }

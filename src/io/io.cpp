@@ -245,7 +245,7 @@ void write_mesh_file_with_state(const std::string &file, const std::string &name
     strip_state(mesh);
     return;
   }
-  const StateArrays state = stream_state(mesh);
+  const StateArrays state = stream_state(mesh, options.orientation);
   write_file_as(file, name, mesh, options, &state);
 }
 

@@ -162,9 +162,15 @@ bool can_stream_state(const Mesh &mesh) {
   return mesh.marked() && mesh.marking != Marking::Explicit;
 }
 
-StateArrays stream_state(const Mesh &mesh) {
+StateArrays stream_state(const Mesh &mesh, const std::vector<std::int8_t> *orientation) {
   StateArrays out;
-  out.flipped = negative_cells(mesh);
+  if (orientation && orientation->size() == mesh.num_cells()) {
+    out.flipped.resize(mesh.num_cells());
+    std::transform(orientation->begin(), orientation->end(), out.flipped.begin(),
+                   [](std::int8_t s) { return std::uint8_t(s <= 0); });
+  } else {
+    out.flipped = negative_cells(mesh);
+  }
   state_sources(mesh, out.flipped, out.cells);
   if (mesh.has_tree())
     tree_sources(mesh, out.cells, out.points);

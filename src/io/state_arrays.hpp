@@ -40,8 +40,9 @@ bool can_stream_state(const Mesh &mesh);
 // encode_state does in place. The mesh itself is not changed, so other
 // threads may read it meanwhile (the CLI's final check runs beside the
 // write). The writer skips stored arrays of the same names, as encode_state
-// replaces them.
-StateArrays stream_state(const Mesh &mesh);
+// replaces them. `orientation` (WriteOptions::orientation), when it has a
+// sign per cell, says which cells to swap without computing their volumes.
+StateArrays stream_state(const Mesh &mesh, const std::vector<std::int8_t> *orientation = nullptr);
 // The tree's arrays (bisect:generation; bisect:parent_a, bisect:parent_b
 // and, when sized for the mesh, bisect:level) as sources, appended to
 // `cells` and `points`; encode_tree and stream_state share them.

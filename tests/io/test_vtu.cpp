@@ -1,8 +1,10 @@
 // Reading and writing .vtu files, and the checks read_mesh/write_mesh make
 // before any format-specific code runs.
+#include "bisect/driver.hpp"
 #include "bisect/generate.hpp"
 #include "bisect/io.hpp"
 #include "bisect/mark.hpp"
+#include "bisect/measure.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
 #include "bisect/state.hpp"
@@ -619,6 +621,51 @@ TEST_CASE("io: write_mesh replaces an existing file and leaves no temporary", "[
   write_mesh(dir.file("m.vtu"), two_tets());
   CHECK(dir.entries() == std::vector<std::string>{"m.vtu"});
   require_same(two_tets(), read_mesh(dir.file("m.vtu")));
+}
+
+TEST_CASE("vtu: a marked mesh written with the final check's orientation is the file written "
+          "without it",
+          "[vtu][state][3d][4d]") {
+  // run_iterations hands back each cell's orientation from the final
+  // check's pass; the writer orients the cells by it instead of computing
+  // their volumes. Children come out of bisection with both orientations,
+  // so both kinds of cell are written.
+  TempDir dir;
+  for (int dim : {3, 4}) {
+    INFO("dim " << dim);
+    Mesh m = generate_kuhn(dim, dim == 4 ? 2 : 4);
+    mark_mesh(m, Marking::Index);
+    auto r = parse_region(dim == 4 ? R"({"type":"sphere","center":[0.3,0.4,0.5,0.6],"radius":0.3})"
+                                   : R"({"type":"sphere","center":[0.3,0.4,0.5],"radius":0.3})",
+                          dim, "t");
+    DriverOptions options;
+    options.iterations = 3;
+    const DriverResult result = run_iterations(m, region_selector(*r), options);
+    REQUIRE(result.orientation.size() == m.num_cells());
+    std::size_t negative = 0;
+    for (std::size_t c = 0; c < m.num_cells(); ++c) {
+      double pts[20];
+      for (int i = 0; i <= dim; ++i)
+        std::copy_n(m.point(m.cell(CellId(c))[i]), dim, pts + i * dim);
+      const double v = signed_volume(pts, dim);
+      CHECK(int(result.orientation[c]) == (v > 0 ? 1 : -1));
+      negative += v < 0;
+    }
+    CHECK(negative > 0);
+    CHECK(negative < m.num_cells());
+    const Mesh before = m;
+    WriteOptions with;
+    with.orientation = &result.orientation;
+    save_mesh(dir.file("with.vtu"), m, with);
+    save_mesh(dir.file("without.vtu"), m);
+    CHECK(read_text(dir.file("with.vtu")) == read_text(dir.file("without.vtu")));
+    CHECK(m.cells == before.cells);
+    // An orientation of another size is not used.
+    const std::vector<std::int8_t> short_one(m.num_cells() - 1, 1);
+    with.orientation = &short_one;
+    save_mesh(dir.file("short.vtu"), m, with);
+    CHECK(read_text(dir.file("short.vtu")) == read_text(dir.file("without.vtu")));
+  }
 }
 
 TEST_CASE("vtu: the bisection state made while writing gives the same file as encode_state",
