@@ -112,12 +112,12 @@ static void state_sources(const Mesh &mesh, const std::vector<std::uint8_t> &fli
   const int swapped_rank = permutation_rank(swapped, mesh.dim + 1);
   const Mesh *m = &mesh;
   const std::vector<std::uint8_t> *flips = &flipped;
-  cells.push_back({kStateArray, 1, ValueType::Int32, [=](std::size_t c) {
+  cells.push_back({kStateArray, 1, ValueType::Int16, [=](std::size_t c) {
                      return double(
                          pack_state((*flips)[c] ? swapped_rank : 0, m->stage[c], m->tag[c]));
                    }});
   const double marking = double(int(mesh.marking));
-  cells.push_back({kMarkingArray, 1, ValueType::Int32, [=](std::size_t) { return marking; }});
+  cells.push_back({kMarkingArray, 1, ValueType::Int8, [=](std::size_t) { return marking; }});
 }
 
 void encode_state(Mesh &mesh) {

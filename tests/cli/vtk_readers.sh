@@ -50,10 +50,10 @@ for i in range(cells, cells + entities):  # tagged entities: lower-dimensional s
 types = set(types)
 cd = g.GetCellData()
 names = {cd.GetArrayName(i): cd.GetArray(i) for i in range(cd.GetNumberOfArrays())}
-if ".t" not in path:  # a refined mesh carries its bisection state as integers
-    for n in ("bisect:state", "bisect:marking"):  # one component each
+if ".t" not in path:  # a refined mesh carries its bisection state as small integers
+    for n, kind in (("bisect:state", "short"), ("bisect:marking", "signed char")):  # one component each
         assert n in names, (n, list(names))
-        assert names[n].GetDataTypeAsString() == "int", (n, names[n].GetDataTypeAsString())
+        assert names[n].GetDataTypeAsString() == kind, (n, names[n].GetDataTypeAsString())
         assert names[n].GetNumberOfTuples() == cells + entities
 if entities:
     phys = names["gmsh:physical"]
