@@ -197,12 +197,13 @@ int run_refine(const RefineArgs &a) {
   options.max_memory_gib = a.max_memory_gib;
   // A region that stays put, tested exactly: each iteration after the first
   // tests only the descendants of the cells the one before selected.
-  if (region && a.indicator.empty() && region->monotone())
+  if (region && a.indicator.empty() && region->monotone()) {
     options.select_among = [&](const Mesh &m, const std::vector<std::uint64_t> &candidates) {
       return select_cells(m, *region, candidates);
     };
-    // --check (always on in a BISECT_PARANOID build): the full conformity check
-    // against the input's invariants after every iteration.
+  }
+  // --check (always on in a BISECT_PARANOID build): the full conformity check
+  // against the input's invariants after every iteration.
 #ifdef BISECT_PARANOID
   options.check_every_iteration = true;
 #else

@@ -49,7 +49,8 @@ public:
   // halfspace, moving sphere, and unions and intersections of them). Then
   // every cell an iteration could select descends from a cell the previous
   // one selected, and the driver tests only those (select_cells with
-  // candidates; 3D ball, 12 iterations: a fifth of the cells in the last).
+  // candidates; 3D ball, 12 iterations: 691,644 of the 1,845,340 cells
+  // before the last).
   // The default is no (the levelset region samples, and its filter ranks).
   virtual bool monotone() const { return false; }
 };

@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include <bit>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -92,55 +93,38 @@ TEST_CASE("driver: a monotone region's selection among the previous one's descen
   // exists in: at each iteration after the first, select_among gets the
   // candidates; the test compares its selection with a full select_cells of
   // the same mesh, and the final meshes with and without narrowing.
-  const std::vector<std::string> specs = {
-      R"({"type": "sphere", "center": [0.4, 0.45, 0.5, 0.55], "radius": 0.3})",
-      R"({"type": "sphere", "center": [0.4, 0.45, 0.5, 0.55], "radius": 0.2, "solid": true})",
-      R"({"type": "hemisphere", "center": [0.5, 0.5, 0.5, 0.5], "radius": 0.35,
-          "normal": [1, 0.5, 0, 0], "offset": 0.6})",
-      R"({"type": "box", "min": [0.1, 0.2, 0.3, 0.1], "max": [0.3, 0.5, 0.45, 0.6]})",
-      R"({"type": "halfspace", "normal": [1, 1, 1, 1], "offset": OFFSET})",
-      R"({"type": "moving_sphere", "center": [0.2, 0.3, 0.2], "velocity": [0.5, 0.1, 0.2],
-          "radius": 0.15})",
-      R"({"type": "union", "regions": [
-          {"type": "sphere", "center": [0.2, 0.2, 0.2, 0.2], "radius": 0.1},
-          {"type": "intersection", "regions": [
-            {"type": "box", "min": [0.4, 0.4, 0.4, 0.4], "max": [0.9, 0.9, 0.9, 0.9]},
-            {"type": "halfspace", "normal": [1, -1, 0, 0], "offset": 0.05}]}]})",
-  };
   for (int dim : {2, 3, 4}) {
-    for (const std::string &spec : specs) {
-      // Each list of coordinates cut to the dimension (a moving sphere's
-      // centre and velocity have one fewer: it needs 3D or 4D space-time),
-      // the halfspace's offset where it cuts a corner off the unit cube.
-      const bool moving = spec.find("moving_sphere") != std::string::npos;
-      if (moving && dim == 2)
-        continue;
-      std::string text;
-      for (std::size_t i = 0; i < spec.size();) {
-        if (spec[i] != '[' || spec[spec.find_first_not_of(" \n", i + 1)] == '{') {
-          text += spec[i++];
-          continue;
-        }
-        const std::size_t end = spec.find(']', i);
-        std::vector<std::string> items;
-        std::string item;
-        for (std::size_t j = i + 1; j < end; ++j)
-          if (spec[j] == ',') {
-            items.push_back(item);
-            item.clear();
-          } else if (spec[j] != ' ') {
-            item += spec[j];
-          }
-        items.push_back(item);
-        items.resize(std::size_t(moving ? dim - 1 : dim));
-        text += '[';
-        for (std::size_t k = 0; k < items.size(); ++k)
-          text += (k ? "," : "") + items[k];
-        text += ']';
-        i = end + 1;
-      }
-      if (const std::size_t at = text.find("OFFSET"); at != std::string::npos)
-        text.replace(at, 6, std::to_string(0.7 * dim));
+    // The first `n` of four coordinates, as a JSON list.
+    auto first = [](std::initializer_list<double> values, int n) {
+      std::string out = "[";
+      for (int k = 0; k < n; ++k)
+        out += (k ? "," : "") + std::to_string(values.begin()[k]);
+      return out + "]";
+    };
+    std::vector<std::string> specs = {
+        R"({"type": "sphere", "center": )" + first({0.4, 0.45, 0.5, 0.55}, dim) +
+            R"(, "radius": 0.3})",
+        R"({"type": "sphere", "center": )" + first({0.4, 0.45, 0.5, 0.55}, dim) +
+            R"(, "radius": 0.2, "solid": true})",
+        R"({"type": "hemisphere", "center": )" + first({0.5, 0.5, 0.5, 0.5}, dim) +
+            R"(, "radius": 0.35, "normal": )" + first({1, 0.5, 0, 0}, dim) + R"(, "offset": 0.6})",
+        R"({"type": "box", "min": )" + first({0.1, 0.2, 0.3, 0.1}, dim) + R"(, "max": )" +
+            first({0.3, 0.5, 0.45, 0.6}, dim) + "}",
+        // cuts a corner off the unit cube
+        R"({"type": "halfspace", "normal": )" + first({1, 1, 1, 1}, dim) + R"(, "offset": )" +
+            std::to_string(0.7 * dim) + "}",
+        R"({"type": "union", "regions": [{"type": "sphere", "center": )" +
+            first({0.2, 0.2, 0.2, 0.2}, dim) +
+            R"(, "radius": 0.1}, {"type": "intersection", "regions": [{"type": "box", "min": )" +
+            first({0.4, 0.4, 0.4, 0.4}, dim) + R"(, "max": )" + first({0.9, 0.9, 0.9, 0.9}, dim) +
+            R"(}, {"type": "halfspace", "normal": )" + first({1, -1, 0, 0}, dim) +
+            R"(, "offset": 0.05}]}]})",
+    };
+    if (dim > 2) // space-time: one coordinate fewer than the mesh
+      specs.push_back(R"({"type": "moving_sphere", "center": )" + first({0.2, 0.3, 0.2}, dim - 1) +
+                      R"(, "velocity": )" + first({0.5, 0.1, 0.2}, dim - 1) +
+                      R"(, "radius": 0.15})");
+    for (const std::string &text : specs) {
       INFO("dim " << dim << ", region " << text);
       const std::unique_ptr<Region> region = parse_region(text, dim, "test");
       REQUIRE(region->monotone());
