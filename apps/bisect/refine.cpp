@@ -211,6 +211,9 @@ int run_refine(const RefineArgs &a) {
 #endif
   // The callback below only reads the mesh, unless a test installs its hook.
   options.on_iteration_changes_mesh = g_after_iteration_hook != nullptr;
+  // Neither the selection nor the callback reads the cell arrays (a test's
+  // hook may): they travel as each cell's input cell until the end.
+  options.cell_data_by_origin = g_after_iteration_hook == nullptr;
   std::size_t selected_total = 0;
   auto on_iteration = [&](const IterationReport &r, Mesh &m) {
     selected_total += r.selected;

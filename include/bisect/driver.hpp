@@ -44,6 +44,15 @@ struct DriverOptions {
   // looked at. Not used with depth > 1, nor when on_iteration may change the
   // mesh.
   std::function<std::vector<CellId>(const Mesh &, const std::vector<std::uint64_t> &)> select_among;
+  // When true, the cell arrays (mesh.cell_data) leave the mesh while the
+  // iterations run and come back, complete, when run_iterations returns or
+  // throws: in between each cell carries only the id of the input cell it
+  // descends from (4 bytes, where each array costs 8 per component). The
+  // selector and on_iteration must not read mesh.cell_data then; refine()
+  // and the checks do not. Not used with depth > 1. After an exception the
+  // mesh is as refine() left it; cells it had not accounted for get cell
+  // 0's values.
+  bool cell_data_by_origin = false;
 };
 
 // One finished iteration.

@@ -60,6 +60,64 @@ std::vector<std::uint64_t> descendants(const std::vector<CellId> &selected,
   return out;
 }
 
+// DriverOptions::cell_data_by_origin: the mesh's cell arrays, kept at the
+// input's cells while `root` names each cell's input cell; put back with a
+// value per cell when this goes out of scope.
+class CellDataByOrigin {
+public:
+  CellDataByOrigin(Mesh &mesh, bool active) : mesh_(mesh) {
+    if (!active || mesh.cell_data.empty())
+      return;
+    arrays_ = std::move(mesh.cell_data);
+    mesh.cell_data.clear();
+    root_.resize(mesh.num_cells());
+    for (std::size_t c = 0; c < root_.size(); ++c)
+      root_[c] = CellId(c);
+    active_ = true;
+  }
+  CellDataByOrigin(const CellDataByOrigin &) = delete;
+  CellDataByOrigin &operator=(const CellDataByOrigin &) = delete;
+  ~CellDataByOrigin() { restore(); }
+  bool active() const { return active_; }
+  // After refine() appended cells from cells_before on, `origin` naming
+  // the cell (below cells_before) each descends from.
+  void appended(std::size_t cells_before, const std::vector<CellId> &origin) {
+    if (!active_ || mesh_.num_cells() == root_.size())
+      return; // nothing appended, or undone
+    if (cells_before != root_.size() || cells_before + origin.size() != mesh_.num_cells())
+      throw CheckError("run_iterations: refine() did not say where its cells descend from");
+    root_.resize(cells_before + origin.size());
+    const std::size_t n = origin.size();
+#pragma omp parallel for num_threads(threads()) schedule(static) if (n > (1u << 16))
+    for (std::size_t i = 0; i < n; ++i)
+      root_[cells_before + i] = root_[origin[i]];
+  }
+  void restore() {
+    if (!active_)
+      return;
+    active_ = false;
+    const std::size_t nc = mesh_.num_cells();
+    root_.resize(nc, 0);
+    for (DataArray &a : arrays_) {
+      const std::size_t k = std::size_t(a.components);
+      std::vector<double> values(nc * k);
+#pragma omp parallel for num_threads(threads()) schedule(static) if (nc > (1u << 16))
+      for (std::size_t c = 0; c < nc; ++c)
+        for (std::size_t j = 0; j < k; ++j)
+          values[c * k + j] = a.values[std::size_t(root_[c]) * k + j];
+      a.values = std::move(values);
+    }
+    std::vector<CellId>().swap(root_);
+    mesh_.cell_data = std::move(arrays_);
+  }
+
+private:
+  Mesh &mesh_;
+  bool active_ = false;
+  std::vector<DataArray> arrays_;
+  std::vector<CellId> root_; // per cell: the input cell it descends from
+};
+
 } // namespace
 
 // The estimate: each selected cell costs about four new cells with closure,
@@ -110,6 +168,10 @@ run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
   std::vector<CellId> origin;
   if (narrow)
     limits.origin = &origin;
+  // Declared after `before`: the invariants are measured with the arrays in.
+  CellDataByOrigin by_origin(mesh, options.cell_data_by_origin && options.depth <= 1);
+  if (by_origin.active())
+    limits.origin = &origin;
   for (int it = 1; it <= options.iterations; ++it) {
     if (options.cancel && options.cancel->load()) {
       result.stop = StopReason::Cancelled;
@@ -139,6 +201,7 @@ run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
       candidates = descendants(selected, cells_before, origin);
       have_candidates = true;
     }
+    by_origin.appended(cells_before, origin);
     std::vector<CellId>().swap(origin);
     result.refine_seconds += seconds_since(t_refine);
     if (r.cancelled) {
@@ -208,6 +271,7 @@ run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
     if (facts.describe(mesh))
       result.orientation = std::move(facts.signs);
   }
+  by_origin.restore();
   return result;
 }
 

@@ -9,6 +9,7 @@
 
 #include <bit>
 #include <initializer_list>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -97,8 +98,11 @@ TEST_CASE("driver: a monotone region's selection among the previous one's descen
     // The first `n` of four coordinates, as a JSON list.
     auto first = [](std::initializer_list<double> values, int n) {
       std::string out = "[";
-      for (int k = 0; k < n; ++k)
-        out += (k ? "," : "") + std::to_string(values.begin()[k]);
+      for (int k = 0; k < n; ++k) {
+        if (k)
+          out += ',';
+        out += std::to_string(values.begin()[k]);
+      }
       return out + "]";
     };
     std::vector<std::string> specs = {
@@ -159,4 +163,69 @@ TEST_CASE("driver: a monotone region's selection among the previous one's descen
       R"({"type": "levelset", "variables": ["x", "y"], "expression": "x*x + y*y", "value": 0.2})",
       2, "test");
   CHECK_FALSE(levelset->monotone());
+}
+
+TEST_CASE("driver: cell arrays carried by each cell's input cell come back as refine() would have "
+          "made them, also after a cell limit stops the run and after a selector throws",
+          "[driver][2d][3d][4d]") {
+  for (int dim : {2, 3, 4}) {
+    INFO("dim " << dim);
+    Mesh start = marked_kuhn(dim);
+    const std::size_t n = start.num_cells();
+    DataArray id{"id", 1, std::vector<double>(n), ValueType::Int32};
+    DataArray vec{"vec", 3, std::vector<double>(3 * n), ValueType::Float64};
+    for (std::size_t c = 0; c < n; ++c) {
+      id.values[c] = double(c);
+      vec.values[3 * c] = 0.5 * double(c);
+      vec.values[3 * c + 1] = double(c) + 0.25;
+      vec.values[3 * c + 2] = -double(c);
+    }
+    start.cell_data = {id, vec};
+    const int iterations = dim == 4 ? 4 : 6;
+    // 0: a plain run; 1: a cell limit stops it before the last iteration;
+    // 2: the selector throws at the third iteration.
+    for (int run : {0, 1, 2}) {
+      INFO("run " << run);
+      std::vector<Mesh> meshes;
+      for (bool by_origin : {false, true}) {
+        Mesh m = start;
+        DriverOptions options;
+        options.iterations = iterations;
+        options.cell_data_by_origin = by_origin;
+        int calls = 0;
+        Selector select = [&](const Mesh &mesh) {
+          if (run == 2 && ++calls == 3)
+            throw std::runtime_error("selector");
+          if (by_origin)
+            CHECK(mesh.cell_data.empty()); // away while the iterations run
+          return corner(mesh);
+        };
+        if (run == 1) {
+          Mesh probe = start;
+          DriverOptions o;
+          o.iterations = iterations - 1;
+          run_iterations(probe, corner, o);
+          options.max_cells = probe.num_cells() + 1;
+        }
+        if (run == 2) {
+          CHECK_THROWS_AS(run_iterations(m, select, options), std::runtime_error);
+        } else {
+          const DriverResult r = run_iterations(m, select, options);
+          CHECK(r.iterations == (run == 1 ? iterations - 1 : iterations));
+        }
+        meshes.push_back(std::move(m));
+      }
+      const Mesh &plain = meshes[0], &carried = meshes[1];
+      CHECK(plain.num_cells() > n);
+      CHECK(carried.cells == plain.cells);
+      REQUIRE(carried.cell_data.size() == 2);
+      for (std::size_t a = 0; a < 2; ++a) {
+        CHECK(carried.cell_data[a].name == plain.cell_data[a].name);
+        CHECK(carried.cell_data[a].components == plain.cell_data[a].components);
+        CHECK(carried.cell_data[a].type == plain.cell_data[a].type);
+        const bool same = carried.cell_data[a].values == plain.cell_data[a].values;
+        CHECK(same);
+      }
+    }
+  }
 }
