@@ -7,6 +7,10 @@
 #   bash bench/e2e.sh                 # 3D ball 12 iterations, 4D hypercube 25; 1 and all threads
 #   ITER3D=14 ITER4D=25 bash bench/e2e.sh
 #   BIG=1 bash bench/e2e.sh           # also issue 13's case: a 56,635-tet ball, 14 iterations (~3 GB)
+#   SIZES=1 bash bench/e2e.sh         # also issue 13's own input (Gmsh's 49,090-tet ball, made by
+#                                     # gmsh from data/ball.geo at size 0.148) at 12, 13, 14 and 15
+#                                     # iterations (about 5, 9, 31 and 53 M tets; ~3.5 GB at 15):
+#                                     # seconds per million generated cells by size
 #   THREADS="1 2" BISECT=build/bisect OUT=/tmp/bench bash bench/e2e.sh
 #
 # Figures: generated cells per second (cells made / whole run), seconds per
@@ -26,6 +30,8 @@ ITER3D=${ITER3D:-12}
 ITER4D=${ITER4D:-25}
 THREADS=${THREADS:-"1 $(nproc)"}
 BIG=${BIG:-0}
+SIZES=${SIZES:-0}
+SIZE_ITERATIONS=${SIZE_ITERATIONS:-"12 13 14 15"}
 mkdir -p "$OUT"
 load=$(cut -d' ' -f1-3 /proc/loadavg)
 cpus=$(nproc)
@@ -64,6 +70,17 @@ if [[ $BIG == 1 ]]; then
   "$BISECT" refine "$root/data/ball.msh" --region "$root/data/regions/everything3d.json" -n 2 \
     -o "$OUT/ball-57k.vtu" -f -q --quality-csv none
   run_case ball57k-hemisphere "$OUT/ball-57k.vtu" "$root/data/regions/hemisphere.json" 14
+fi
+if [[ $SIZES == 1 ]]; then
+  command -v gmsh >/dev/null || {
+    echo "bench/e2e.sh: SIZES=1 needs gmsh (scripts/install-deps.sh installs it)" >&2
+    exit 2
+  }
+  sed 's/= 0\.3;/= 0.148;/' "$root/data/ball.geo" >"$OUT/ball148.geo"
+  gmsh "$OUT/ball148.geo" -3 -format msh41 -o "$OUT/ball148.msh" >/dev/null
+  for n in $SIZE_ITERATIONS; do
+    run_case "ball49k-hemisphere-n$n" "$OUT/ball148.msh" "$root/data/regions/hemisphere.json" "$n"
+  done
 fi
 "$BISECT" generate kuhn --dim 4 --cells 1 -o "$OUT/hypercube.vtu" -f 2>/dev/null
 run_case hypercube-moving-sphere "$OUT/hypercube.vtu" "$root/data/regions/moving-sphere.json" \

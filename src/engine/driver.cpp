@@ -79,6 +79,13 @@ public:
   CellDataByOrigin &operator=(const CellDataByOrigin &) = delete;
   ~CellDataByOrigin() { restore(); }
   bool active() const { return active_; }
+  // The values per cell of the arrays held here.
+  int components() const {
+    int k = 0;
+    for (const DataArray &a : arrays_)
+      k += a.components;
+    return active_ ? k : 0;
+  }
   // After refine() appended cells from cells_before on, `origin` naming
   // the cell (below cells_before) each descends from.
   void appended(std::size_t cells_before, const std::vector<CellId> &origin) {
@@ -118,12 +125,12 @@ private:
   std::vector<CellId> root_; // per cell: the input cell it descends from
 };
 
-} // namespace
-
 // The estimate: each selected cell costs about four new cells with closure,
 // and a cell costs its ids, state and arrays twice over while vectors grow.
-std::string memory_shortfall(const Mesh &mesh, std::size_t selected, double max_gib) {
-  double per_cell = 2.5 * (4.0 * (mesh.dim + 1) + 2.0) + 8.0;
+// `components`: values per cell of cell arrays held outside the mesh
+// meanwhile (CellDataByOrigin), counted as if they were in it.
+std::string shortfall(const Mesh &mesh, std::size_t selected, double max_gib, int components) {
+  double per_cell = 2.5 * (4.0 * (mesh.dim + 1) + 2.0) + 8.0 + 2.0 * 8.0 * components;
   for (const DataArray &a : mesh.cell_data)
     per_cell += 2.0 * 8.0 * a.components;
   // max_gib bounds the whole mesh; otherwise what it adds must fit in the
@@ -139,6 +146,11 @@ std::string memory_shortfall(const Mesh &mesh, std::size_t selected, double max_
                 need / 1073741824.0, max_gib > 0 ? "in all" : "more memory", avail / 1073741824.0,
                 max_gib > 0 ? "allowed by --max-memory" : "available");
   return buf;
+}
+} // namespace
+
+std::string memory_shortfall(const Mesh &mesh, std::size_t selected, double max_gib) {
+  return shortfall(mesh, selected, max_gib, 0);
 }
 
 DriverResult
@@ -183,7 +195,8 @@ run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
     std::vector<std::uint64_t>().swap(candidates);
     have_candidates = false;
     result.select_seconds += seconds_since(t0);
-    if (std::string why = memory_shortfall(mesh, selected.size(), options.max_memory_gib);
+    if (std::string why =
+            shortfall(mesh, selected.size(), options.max_memory_gib, by_origin.components());
         !why.empty()) {
       result.stop = StopReason::MemoryLimit;
       result.stop_message = "stopping before iteration " + std::to_string(it) + ": " + why;
