@@ -51,7 +51,8 @@ struct DriverOptions {
   // selector and on_iteration must not read mesh.cell_data then; refine()
   // and the checks do not. Not used with depth > 1. After an exception the
   // mesh is as refine() left it; cells it had not accounted for get cell
-  // 0's values.
+  // 0's values (and if memory runs out rebuilding them, the arrays are
+  // dropped).
   bool cell_data_by_origin = false;
 };
 

@@ -68,6 +68,9 @@ public:
   CellDataByOrigin(Mesh &mesh, bool active) : mesh_(mesh) {
     if (!active || mesh.cell_data.empty())
       return;
+    for (const DataArray &a : mesh.cell_data) // one tuple per cell, or left in
+      if (a.components < 1 || a.values.size() != mesh.num_cells() * std::size_t(a.components))
+        return;
     arrays_ = std::move(mesh.cell_data);
     mesh.cell_data.clear();
     root_.resize(mesh.num_cells());
@@ -77,7 +80,16 @@ public:
   }
   CellDataByOrigin(const CellDataByOrigin &) = delete;
   CellDataByOrigin &operator=(const CellDataByOrigin &) = delete;
-  ~CellDataByOrigin() { restore(); }
+  // On the way out of run_iterations, also by an exception; if memory runs
+  // out rebuilding them, the arrays are dropped rather than left the wrong
+  // size.
+  ~CellDataByOrigin() {
+    try {
+      restore();
+    } catch (...) {
+      mesh_.cell_data.clear();
+    }
+  }
   bool active() const { return active_; }
   // The values per cell of the arrays held here.
   int components() const {
