@@ -9,7 +9,7 @@
 #   BIG=1 bash bench/e2e.sh           # also issue 13's case: a 56,635-tet ball, 14 iterations (~3 GB)
 #   SIZES=1 bash bench/e2e.sh         # also issue 13's own input (Gmsh's 49,090-tet ball, made by
 #                                     # gmsh from data/ball.geo at size 0.148) at 12, 13, 14 and 15
-#                                     # iterations (about 5, 9, 31 and 53 M tets; ~3.5 GB at 15):
+#                                     # iterations (10.8, 18.3, 31.1 and 52.1 M tets; 2.5 GB at 15):
 #                                     # seconds per million generated cells by size
 #   THREADS="1 2" BISECT=build/bisect OUT=/tmp/bench bash bench/e2e.sh
 #
@@ -77,6 +77,10 @@ if [[ $SIZES == 1 ]]; then
     exit 2
   }
   sed 's/= 0\.3;/= 0.148;/' "$root/data/ball.geo" >"$OUT/ball148.geo"
+  grep -q 'MeshSizeMax = 0.148;' "$OUT/ball148.geo" || {
+    echo "bench/e2e.sh: data/ball.geo no longer sets its size as '= 0.3;'; SIZES=1 cannot make the 0.148 ball" >&2
+    exit 2
+  }
   gmsh "$OUT/ball148.geo" -3 -format msh41 -o "$OUT/ball148.msh" >/dev/null
   for n in $SIZE_ITERATIONS; do
     run_case "ball49k-hemisphere-n$n" "$OUT/ball148.msh" "$root/data/regions/hemisphere.json" "$n"

@@ -94,9 +94,10 @@ public:
   // The values per cell of the arrays held here.
   int components() const {
     int k = 0;
-    for (const DataArray &a : arrays_)
-      k += a.components;
-    return active_ ? k : 0;
+    if (active_)
+      for (const DataArray &a : arrays_)
+        k += a.components;
+    return k;
   }
   // After refine() appended cells from cells_before on, `origin` naming
   // the cell (below cells_before) each descends from.

@@ -257,3 +257,31 @@ TEST_CASE("driver: a cell array without one tuple per cell stays in the mesh wit
   REQUIRE(meshes[1].cell_data.size() == 1);
   CHECK(meshes[1].cell_data[0].values == meshes[0].cell_data[0].values);
 }
+
+TEST_CASE("driver: --max-memory's estimate counts cell arrays carried by input cell as if they "
+          "were in the mesh: for every budget the run stops at the same iteration",
+          "[driver][3d]") {
+  Mesh start = marked_kuhn(3);
+  start.cell_data = {{"a", 2, std::vector<double>(2 * start.num_cells(), 1.0)}};
+  // Budgets from far too small to enough, 20% apart: the estimate without
+  // the arrays is 0.6 of the one with them, so a budget between the two
+  // lets an iteration through that it should not.
+  int stopped = 0;
+  for (double gib = 1e-6; gib < 1e-2; gib *= 1.2) {
+    INFO("budget " << gib << " GiB");
+    std::vector<DriverResult> runs;
+    for (bool by_origin : {false, true}) {
+      Mesh m = start;
+      DriverOptions options;
+      options.iterations = 6;
+      options.max_memory_gib = gib;
+      options.cell_data_by_origin = by_origin;
+      runs.push_back(run_iterations(m, corner, options));
+      CHECK(m.cell_data.size() == 1);
+    }
+    CHECK(runs[1].stop == runs[0].stop);
+    CHECK(runs[1].iterations == runs[0].iterations);
+    stopped += runs[0].stop == StopReason::MemoryLimit && runs[0].iterations >= 1;
+  }
+  CHECK(stopped >= 5); // budgets that stop a run after some iterations were tried
+}
