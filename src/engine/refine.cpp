@@ -29,14 +29,89 @@
 #include <stdexcept>
 #include <type_traits>
 
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define BISECT_SCAN_AVX2 1
+#endif
+
 namespace bisect {
 
 namespace testing {
 int midpoint_room();
 void count_midpoint_retry();
+bool vector_scan();
 } // namespace testing
 
 namespace {
+
+// The closure's scan (Refiner::run) over the cells [lo, hi) of `cells` (N
+// ids each): ends = the bits of a cell's vertices set in `flag` (bit i:
+// x[i]); keep(c, ends) decides, and is asked only for the cells with a bit
+// set in `bisected` or with two flagged vertices (no other can be kept).
+template <int N, class Keep>
+void scan_flagged_scalar(const VertexId *cells, std::size_t lo, std::size_t hi,
+                         const std::uint64_t *flag, const std::uint64_t *bisected, Keep &keep) {
+  for (std::size_t c = lo; c < hi; ++c) {
+    const VertexId *x = cells + c * N;
+    unsigned ends = 0;
+    for (int i = 0; i < N; ++i)
+      ends |= unsigned(flag[x[i] >> 6] >> (x[i] & 63) & 1) << i;
+    if ((bisected[c >> 6] >> (c & 63) & 1) || (ends & (ends - 1)))
+      keep(c, ends);
+  }
+}
+
+#ifdef BISECT_SCAN_AVX2
+// The same, eight cells at a time: their 8N ids are N vectors of eight, and
+// each id's flag is gathered from the bit set read as 32-bit words. Late
+// passes flag a few thousand vertices among millions of cells, so nearly
+// every group of eight has no two flags and is passed over in one test.
+// ALGORITHMS §6's closure is unchanged: keep() still decides. 3D ball, 12
+// iterations, one thread, 124.7 M cells scanned: passes with fewer than
+// 1,000 new midpoints 1.4 ns a cell (4.2 ns before); the whole scan 0.44 s
+// against 0.50-0.62 s, the rest being keep()'s probes of the midpoint table
+// in the first passes of an iteration.
+template <int N, class Keep>
+__attribute__((target("avx2"))) void scan_flagged_avx2(const VertexId *cells, std::size_t lo,
+                                                       std::size_t hi, const std::uint64_t *flag,
+                                                       const std::uint64_t *bisected, Keep &keep) {
+  static_assert(8 * N <= 64);
+  const int *words = reinterpret_cast<const int *>(flag);
+  const __m256i low5 = _mm256_set1_epi32(31);
+  std::size_t c = lo;
+  if (c % 8 == 0)
+    for (; c + 8 <= hi; c += 8) {
+      const VertexId *x = cells + c * N;
+      std::uint64_t ends = 0;
+      for (int j = 0; j < N; ++j) {
+        const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(x + 8 * j));
+        const __m256i w = _mm256_i32gather_epi32(words, _mm256_srli_epi32(v, 5), 4);
+        // The id's bit to the sign: bit (v & 31) shifted left by 31 - it.
+        const __m256i b = _mm256_sllv_epi32(w, _mm256_sub_epi32(low5, _mm256_and_si256(v, low5)));
+        ends |= std::uint64_t(unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(b)))) << (8 * j);
+      }
+      const unsigned bis = unsigned(bisected[c >> 6] >> (c & 63)) & 0xFFu;
+      if (!bis && (ends & (ends - 1)) == 0)
+        continue;
+      for (int i = 0; i < 8; ++i) {
+        const unsigned e = unsigned(ends >> (N * i)) & ((1u << N) - 1);
+        if ((bis >> i & 1) || (e & (e - 1)))
+          keep(c + i, e);
+      }
+    }
+  scan_flagged_scalar<N>(cells, c, hi, flag, bisected, keep);
+}
+#endif
+
+template <int N, class Keep>
+void scan_flagged(const VertexId *cells, std::size_t lo, std::size_t hi, const std::uint64_t *flag,
+                  const std::uint64_t *bisected, Keep &keep) {
+#ifdef BISECT_SCAN_AVX2
+  if (testing::vector_scan())
+    return scan_flagged_avx2<N>(cells, lo, hi, flag, bisected, keep);
+#endif
+  scan_flagged_scalar<N>(cells, lo, hi, flag, bisected, keep);
+}
 
 // Open-addressing map from an edge key (min << 32 | max, never 0) to the id
 // of its midpoint.
@@ -353,18 +428,21 @@ public:
             bisected[c >> 6] |= std::uint64_t(1) << (c & 63);
           const VertexId *cells = m_.cells.data();
           const std::uint64_t *ends_flag = flag.data(), *was_bisected = bisected.data();
-          for_blocks(cells_before, found, [this, cells, ends_flag, was_bisected](std::size_t c) {
-            const VertexId *x = cells + c * N;
-            if (was_bisected[c >> 6] >> (c & 63) & 1)
-              return has_hanging_edge(x);
-            // A cell this pass did not bisect had no bisected edge before
-            // it (else the pass would have bisected it): only an edge with
-            // both ends flagged can have a midpoint.
-            unsigned ends = 0;
-            for (int i = 0; i < N; ++i)
-              ends |= unsigned(ends_flag[x[i] >> 6] >> (x[i] & 63) & 1) << i;
-            return has_midpoint_among(x, ends);
-          });
+          for_block_ranges(
+              cells_before, found,
+              [this, cells, ends_flag, was_bisected](std::size_t lo, std::size_t hi,
+                                                     std::vector<CellId> &out) {
+                auto keep = [this, cells, was_bisected, &out](std::size_t c, unsigned ends) {
+                  const VertexId *x = cells + c * N;
+                  // A cell this pass did not bisect had no bisected edge before
+                  // it (else the pass would have bisected it): only an edge
+                  // with both ends flagged can have a midpoint.
+                  if (was_bisected[c >> 6] >> (c & 63) & 1 ? has_hanging_edge(x)
+                                                           : has_midpoint_among(x, ends))
+                    out.push_back(CellId(c));
+                };
+                scan_flagged<N>(cells, lo, hi, ends_flag, was_bisected, keep);
+              });
           work.clear();
         } else {
           // No new midpoint: no cell but these has a new bisected edge.
@@ -454,21 +532,31 @@ private:
   // threads when there are enough of them.
   template <class Test>
   static void for_blocks(std::size_t n, std::vector<std::vector<CellId>> &found, Test &&test) {
+    for_block_ranges(n, found,
+                     [test](std::size_t lo, std::size_t hi, std::vector<CellId> &out) mutable {
+                       for (std::size_t i = lo; i < hi; ++i)
+                         if (test(i))
+                           out.push_back(CellId(i));
+                     });
+  }
+  // The same with scan(lo, hi, out) appending to out (empty) what block
+  // [lo, hi) finds, in increasing order; lo is a multiple of kBlock.
+  template <class Scan>
+  static void for_block_ranges(std::size_t n, std::vector<std::vector<CellId>> &found,
+                               Scan &&scan) {
     constexpr std::size_t kBlock = std::size_t(1) << 14;
     const std::size_t blocks = (n + kBlock - 1) / kBlock;
     found.resize(blocks);
     const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
     for (std::size_t k = 0; k < blocks; ++k) {
-      // A copy of the test on this thread's stack: what it holds stays in
+      // A copy of the scan on this thread's stack: what it holds stays in
       // registers across the push_back()s (a scan of every cell per pass
       // reloaded the mesh's pointers for every cell).
-      std::remove_cvref_t<Test> local = test;
+      std::remove_cvref_t<Scan> local = scan;
       std::vector<CellId> &out = found[k];
       out.clear();
-      for (std::size_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i)
-        if (local(i))
-          out.push_back(CellId(i));
+      local(k * kBlock, std::min(n, (k + 1) * kBlock), out);
     }
   }
 
@@ -924,6 +1012,18 @@ namespace {
 std::atomic<int> g_parallel_bisection{0};
 std::atomic<int> g_midpoint_room{0};
 std::atomic<std::size_t> g_midpoint_retries{0};
+std::atomic<bool> g_vector_scan{true}; // wanted; on where the processor has AVX2
+bool has_avx2() {
+#ifdef BISECT_SCAN_AVX2
+  static const bool yes = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") != 0;
+  }();
+  return yes;
+#else
+  return false;
+#endif
+}
 } // namespace
 void set_parallel_bisection(int mode) {
   g_parallel_bisection = mode;
@@ -943,5 +1043,12 @@ void count_midpoint_retry() {
 }
 std::size_t midpoint_retries() {
   return g_midpoint_retries;
+}
+bool set_vector_scan(bool on) {
+  g_vector_scan = on;
+  return vector_scan();
+}
+bool vector_scan() {
+  return g_vector_scan.load(std::memory_order_relaxed) && has_avx2();
 }
 } // namespace bisect::testing

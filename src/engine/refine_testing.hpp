@@ -19,4 +19,10 @@ int parallel_bisection();
 void set_midpoint_room(int k);
 std::size_t midpoint_retries();
 
+// Whether the closure's scan for cells holding both ends of a bisected edge
+// reads eight cells at a time with AVX2 (the default where the processor
+// has it) or one at a time. The result must be the same bit for bit.
+// Returns whether the vector scan is now on (never without AVX2).
+bool set_vector_scan(bool on);
+
 } // namespace bisect::testing

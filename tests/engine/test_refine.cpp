@@ -596,6 +596,47 @@ TEST_CASE("parallel kernel: bisecting a pass's cells on all threads gives the se
   REQUIRE(retries > 0);
 }
 
+TEST_CASE("vector scan: the closure's scan eight cells at a time gives the one-at-a-time scan's "
+          "mesh bit for bit",
+          "[refine][2d][3d][4d]") {
+  struct Case {
+    const char *name;
+    Mesh mesh;
+    std::string region;
+    int iterations;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"square, sphere", load("square.msh"),
+                   R"({"type":"sphere","center":[0.5,0.5],"radius":0.3})", 8});
+  cases.push_back(
+      {"ball, hemisphere", load("ball.msh"),
+       R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,"normal":[1,0,0],"offset":0.5})",
+       4});
+  cases.push_back({"4D cube, sphere", generate_kuhn(4, 2),
+                   R"({"type":"sphere","center":[0.3,0.3,0.3,0.3],"radius":0.4})", 10});
+  const bool vector = testing::set_vector_scan(true);
+  if (!vector)
+    WARN("this processor has no AVX2: only the one-at-a-time scan ran");
+  for (Case &c : cases)
+    for (Marking mk : kMarkings) {
+      INFO(c.name << ", marking " << marking_name(mk));
+      Mesh m = c.mesh;
+      mark_mesh(m, mk);
+      const Invariants inv = measure_invariants(m);
+      testing::set_vector_scan(false);
+      const Mesh one = run_kernel(m, c.region, c.iterations, -1, 1);
+      testing::set_vector_scan(true);
+      for (int threads : {1, 2}) {
+        INFO(threads << " threads");
+        const Mesh eight = run_kernel(m, c.region, c.iterations, 0, threads);
+        require_same_mesh(eight, one);
+      }
+      REQUIRE(one.num_cells() > 4 * m.num_cells());
+      REQUIRE_CONFORMING(one, inv);
+    }
+  testing::set_vector_scan(true);
+}
+
 TEST_CASE("parallel kernel: a cell past 65535 generations is refused as in the serial loop",
           "[refine][threads][2d]") {
   Mesh m = generate_kuhn(2, 8);
