@@ -67,10 +67,12 @@ void scan_flagged_scalar(const VertexId *cells, std::size_t lo, std::size_t hi,
 // passes flag a few thousand vertices among millions of cells, so nearly
 // every group of eight has no two flags and is passed over in one test.
 // ALGORITHMS §6's closure is unchanged: keep() still decides. 3D ball, 12
-// iterations, one thread, 124.7 M cells scanned: passes with fewer than
-// 1,000 new midpoints 1.4 ns a cell (4.2 ns before); the whole scan 0.44 s
-// against 0.50-0.62 s, the rest being keep()'s probes of the midpoint table
-// in the first passes of an iteration.
+// iterations, one thread, 124.7 M cells scanned, runs alternated: passes
+// with fewer than 1,000 new midpoints 1.54-2.08 ns a cell against 2.25-3.29
+// one at a time; the whole scan 0.46-0.58 s against 0.51-0.72 s, the rest
+// being keep()'s lookups in the midpoint table in the first passes of an
+// iteration. Prefetching those lookups one group ahead made the refinement
+// slower (1.16 -> 1.43 s), and was dropped.
 template <int N, class Keep>
 __attribute__((target("avx2"))) void scan_flagged_avx2(const VertexId *cells, std::size_t lo,
                                                        std::size_t hi, const std::uint64_t *flag,
