@@ -224,6 +224,13 @@ public:
     }
   }
   std::uint32_t first_bidder(std::uint32_t s) const { return slots_[s].first; }
+  // Asks for slot s ahead of fresh(), first_bidder(), settle() or value().
+  void prefetch_slot(std::uint32_t s) const { __builtin_prefetch(&slots_[s]); }
+  // Asks for what insert(k) or claim(k) reads first, ahead of it.
+  void prefetch_key(std::uint64_t k) const {
+    if (capacity_ != 0)
+      __builtin_prefetch(&slots_[slot(k)]);
+  }
   // Gives a fresh slot its value (one thread per slot).
   void settle(std::uint32_t s, VertexId value) {
     slots_[s].value = value;
@@ -402,8 +409,11 @@ public:
         if (parallel_round(work.size()))
           bisect_all(work);
         else
-          for (CellId c : work)
-            bisect(c);
+          for (std::size_t i = 0; i < work.size(); ++i) {
+            if (i + kBisectAhead < work.size())
+              prefetch_bisection(work[i + kBisectAhead]);
+            bisect(work[i]);
+          }
         result.kernel_seconds +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         result.bisections += work.size();
@@ -675,6 +685,17 @@ private:
     return next;
   }
 
+  // Asks for what bisecting cell c reads at random: its edge's slot in the
+  // midpoint table and the edge's end points. A cell of the pass is not
+  // changed before its turn (each is bisected once, only in its own slot).
+  static constexpr std::size_t kBisectAhead = 8;
+  void prefetch_bisection(CellId c) const {
+    const auto [a, b] = refinement_edge(c);
+    mids_.prefetch_key(MidpointMap::key(a, b));
+    __builtin_prefetch(m_.point(a));
+    __builtin_prefetch(m_.point(b));
+  }
+
   // Bisects cell c by its refinement edge: child 1 in place, child 2 appended.
   void bisect(CellId c) {
     const VertexId *x = m_.cell(c);
@@ -737,6 +758,9 @@ private:
   void bisect_all(const std::vector<CellId> &work) {
     const std::size_t w = work.size(), nc = m_.num_cells(), nv = m_.num_vertices();
     constexpr std::size_t kBlock = std::size_t(1) << 11;
+    // The passes after the claims read each cell's slot of the midpoint
+    // table again, at random: asked for this many cells ahead.
+    constexpr std::size_t kSlotAhead = 16;
     const std::size_t blocks = (w + kBlock - 1) / kBlock;
     const int workers = int(std::clamp<std::size_t>(blocks, 1, std::size_t(threads())));
     std::vector<std::uint32_t> slot(w);
@@ -762,18 +786,27 @@ private:
       {
         std::size_t credits = 0; // MidpointMap::claim
 #pragma omp for schedule(dynamic, 1)
-        for (std::size_t b = 0; b < blocks; ++b)
-          for (std::size_t i = b * kBlock; i < std::min(w, (b + 1) * kBlock); ++i) {
+        for (std::size_t b = 0; b < blocks; ++b) {
+          const std::size_t end = std::min(w, (b + 1) * kBlock);
+          // The edges first, then the claims, each asking for a slot of
+          // the table kSlotAhead claims ahead.
+          for (std::size_t i = b * kBlock; i < end; ++i) {
             const CellId c = work[i];
+            pick[i] = refinement_pick(c);
+            ends[2 * i] = m_.cell(c)[pick[i].first];
+            ends[2 * i + 1] = m_.cell(c)[pick[i].second];
+          }
+          for (std::size_t i = b * kBlock; i < end; ++i) {
+            const CellId c = work[i];
+            if (i + kSlotAhead < end)
+              mids_.prefetch_key(
+                  MidpointMap::key(ends[2 * (i + kSlotAhead)], ends[2 * (i + kSlotAhead) + 1]));
             if (m_.generation[c] == std::numeric_limits<std::uint16_t>::max())
               note(b, i, kGenerations);
             if constexpr (Dim == 2)
               if (m_.stage[c] != Stage::Maubach)
                 note(b, i, kStage);
-            pick[i] = refinement_pick(c);
-            const VertexId a = m_.cell(c)[pick[i].first], z = m_.cell(c)[pick[i].second];
-            ends[2 * i] = a;
-            ends[2 * i + 1] = z;
+            const VertexId a = ends[2 * i], z = ends[2 * i + 1];
             const std::uint32_t s = mids_.claim(MidpointMap::key(a, z), credits);
             if (s == MidpointMap::kNoSlot)
               continue; // the round overflowed: claimed again below
@@ -782,6 +815,7 @@ private:
               mids_.bid(s, std::uint32_t(i));
             flags[i] = splitter_ && splitter_->may_split(a, z) ? kSplits : 0;
           }
+        }
       }
       if (!mids_.overflowed())
         break;
@@ -792,6 +826,8 @@ private:
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
     for (std::size_t b = 0; b < blocks; ++b)
       for (std::size_t i = b * kBlock; i < std::min(w, (b + 1) * kBlock); ++i) {
+        if (i + kSlotAhead < w)
+          mids_.prefetch_slot(slot[i + kSlotAhead]);
         const bool won = mids_.fresh(slot[i]) && mids_.first_bidder(slot[i]) == std::uint32_t(i);
         flags[i] |= won ? kWon : 0;
         winners[b + 1] += won;
@@ -843,6 +879,8 @@ private:
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
     for (std::size_t b = 0; b < blocks; ++b)
       for (std::size_t i = b * kBlock; i < std::min(w, (b + 1) * kBlock); ++i) {
+        if (i + kSlotAhead < w)
+          mids_.prefetch_slot(slot[i + kSlotAhead]);
         const VertexId z = mids_.value(slot[i]);
         if (flags[i] & kWon) {
           const VertexId a = ends[2 * i], e = ends[2 * i + 1];
