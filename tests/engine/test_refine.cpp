@@ -544,96 +544,92 @@ Mesh run_kernel(Mesh m, const std::string &region_json, int iterations, int mode
   return m;
 }
 
+struct KernelCase {
+  const char *name;
+  Mesh mesh;
+  std::string region; // empty: every cell
+  int iterations;
+};
+
+// Local refinement in 2D, 3D (passes of several thousand cells: several of
+// the parallel kernel's blocks) and 4D, and with `uniform` every cell too.
+std::vector<KernelCase> kernel_cases(bool uniform) {
+  std::vector<KernelCase> cases;
+  cases.push_back({"square, sphere", load("square.msh"),
+                   R"({"type":"sphere","center":[0.5,0.5],"radius":0.3})", 8});
+  if (uniform)
+    cases.push_back({"square, uniform", load("square.msh"), "", 3});
+  cases.push_back(
+      {"ball, hemisphere", load("ball.msh"),
+       R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,"normal":[1,0,0],"offset":0.5})",
+       4});
+  if (uniform)
+    cases.push_back({"ball, uniform", load("ball.msh"), "", 2});
+  cases.push_back({"4D cube, sphere", generate_kuhn(4, 2),
+                   R"({"type":"sphere","center":[0.3,0.3,0.3,0.3],"radius":0.4})", 10});
+  if (uniform)
+    cases.push_back({"4D cube, uniform", generate_kuhn(4, 3), "", 2});
+  return cases;
+}
+
+// f(case, marked mesh, its invariants) for every case and marking.
+template <class F> void for_each_marked(const std::vector<KernelCase> &cases, F &&f) {
+  for (const KernelCase &c : cases)
+    for (Marking mk : kMarkings) {
+      INFO(c.name << ", marking " << marking_name(mk));
+      Mesh m = c.mesh;
+      mark_mesh(m, mk);
+      f(c, m, measure_invariants(m));
+    }
+}
+
 } // namespace
 
 TEST_CASE("parallel kernel: bisecting a pass's cells on all threads gives the serial loop's mesh "
           "bit for bit",
           "[refine][threads][2d][3d][4d]") {
-  struct Case {
-    const char *name;
-    Mesh mesh;
-    std::string region; // empty: every cell
-    int iterations;
-  };
-  std::vector<Case> cases;
-  cases.push_back({"square, sphere", load("square.msh"),
-                   R"({"type":"sphere","center":[0.5,0.5],"radius":0.3})", 8});
-  cases.push_back({"square, uniform", load("square.msh"), "", 3});
-  // passes of several thousand cells: several of the kernel's blocks
-  cases.push_back(
-      {"ball, hemisphere", load("ball.msh"),
-       R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,"normal":[1,0,0],"offset":0.5})",
-       4});
-  cases.push_back({"ball, uniform", load("ball.msh"), "", 2});
-  cases.push_back({"4D cube, sphere", generate_kuhn(4, 2),
-                   R"({"type":"sphere","center":[0.3,0.3,0.3,0.3],"radius":0.4})", 10});
-  cases.push_back({"4D cube, uniform", generate_kuhn(4, 3), "", 2});
+  const std::vector<KernelCase> cases = kernel_cases(true);
   // The Gmsh meshes carry tagged boundary facets, which split with the cells.
   REQUIRE(!cases[0].mesh.entities.empty());
   REQUIRE(!cases[2].mesh.entities.empty());
   std::size_t retries = 0;
-  for (Case &c : cases)
-    for (Marking mk : kMarkings) {
-      INFO(c.name << ", marking " << marking_name(mk));
-      Mesh m = c.mesh;
-      mark_mesh(m, mk);
-      const Invariants inv = measure_invariants(m);
-      const Mesh serial = run_kernel(m, c.region, c.iterations, -1, 1);
-      REQUIRE(serial.num_cells() > 2 * m.num_cells());
-      for (int threads : {1, 2, 3}) {
-        INFO(threads << " threads");
-        const Mesh parallel = run_kernel(m, c.region, c.iterations, 1, threads);
-        require_same_mesh(parallel, serial);
-      }
-      // Passes that overflow the midpoint table claim their edges again.
-      testing::set_midpoint_room(64);
-      const Mesh retried = run_kernel(m, c.region, c.iterations, 1, 2);
-      retries += testing::midpoint_retries();
-      testing::set_midpoint_room(0);
-      require_same_mesh(retried, serial);
-      REQUIRE_CONFORMING(serial, inv);
+  for_each_marked(cases, [&](const KernelCase &c, const Mesh &m, const Invariants &inv) {
+    const Mesh serial = run_kernel(m, c.region, c.iterations, -1, 1);
+    REQUIRE(serial.num_cells() > 2 * m.num_cells());
+    for (int threads : {1, 2, 3}) {
+      INFO(threads << " threads");
+      const Mesh parallel = run_kernel(m, c.region, c.iterations, 1, threads);
+      require_same_mesh(parallel, serial);
     }
+    // Passes that overflow the midpoint table claim their edges again.
+    testing::set_midpoint_room(64);
+    const Mesh retried = run_kernel(m, c.region, c.iterations, 1, 2);
+    retries += testing::midpoint_retries();
+    testing::set_midpoint_room(0);
+    require_same_mesh(retried, serial);
+    REQUIRE_CONFORMING(serial, inv);
+  });
   REQUIRE(retries > 0);
 }
 
 TEST_CASE("vector scan: the closure's scan eight cells at a time gives the one-at-a-time scan's "
           "mesh bit for bit",
           "[refine][2d][3d][4d]") {
-  struct Case {
-    const char *name;
-    Mesh mesh;
-    std::string region;
-    int iterations;
-  };
-  std::vector<Case> cases;
-  cases.push_back({"square, sphere", load("square.msh"),
-                   R"({"type":"sphere","center":[0.5,0.5],"radius":0.3})", 8});
-  cases.push_back(
-      {"ball, hemisphere", load("ball.msh"),
-       R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,"normal":[1,0,0],"offset":0.5})",
-       4});
-  cases.push_back({"4D cube, sphere", generate_kuhn(4, 2),
-                   R"({"type":"sphere","center":[0.3,0.3,0.3,0.3],"radius":0.4})", 10});
-  const bool vector = testing::set_vector_scan(true);
-  if (!vector)
+  if (!testing::set_vector_scan(true))
     WARN("this processor has no AVX2: only the one-at-a-time scan ran");
-  for (Case &c : cases)
-    for (Marking mk : kMarkings) {
-      INFO(c.name << ", marking " << marking_name(mk));
-      Mesh m = c.mesh;
-      mark_mesh(m, mk);
-      const Invariants inv = measure_invariants(m);
-      testing::set_vector_scan(false);
-      const Mesh one = run_kernel(m, c.region, c.iterations, -1, 1);
-      testing::set_vector_scan(true);
-      for (int threads : {1, 2}) {
-        INFO(threads << " threads");
-        const Mesh eight = run_kernel(m, c.region, c.iterations, 0, threads);
-        require_same_mesh(eight, one);
-      }
-      REQUIRE(one.num_cells() > 4 * m.num_cells());
-      REQUIRE_CONFORMING(one, inv);
-    }
+  for_each_marked(kernel_cases(false),
+                  [&](const KernelCase &c, const Mesh &m, const Invariants &inv) {
+                    testing::set_vector_scan(false);
+                    const Mesh one = run_kernel(m, c.region, c.iterations, -1, 1);
+                    testing::set_vector_scan(true);
+                    for (int threads : {1, 2}) {
+                      INFO(threads << " threads");
+                      const Mesh eight = run_kernel(m, c.region, c.iterations, 0, threads);
+                      require_same_mesh(eight, one);
+                    }
+                    REQUIRE(one.num_cells() > 4 * m.num_cells());
+                    REQUIRE_CONFORMING(one, inv);
+                  });
   testing::set_vector_scan(true);
 }
 
