@@ -26,6 +26,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <omp.h>
 #include <stdexcept>
 #include <type_traits>
 
@@ -40,6 +41,8 @@ namespace testing {
 int midpoint_room();
 void count_midpoint_retry();
 bool vector_scan();
+int walk_around();
+void count_walk();
 } // namespace testing
 
 namespace {
@@ -333,6 +336,81 @@ private:
   std::size_t size_ = 0, mask_ = 0;
 };
 
+// The cells around a vertex during one refine() call, for the closure's
+// passes that make few midpoints (Refiner::walk_around): the input cells
+// around each input vertex, and each input cell's descendants appended so
+// far, newest first. A bisection keeps each vertex of its cell in one child
+// or both and adds only the midpoint, so a cell holding an input vertex
+// descends from an input cell holding it; a cell holding a vertex the call
+// made descends from a cell holding that vertex's edge, so from an input
+// cell holding the root of its edge's first end (Refiner::root).
+// Memory: 4 (d + 1) bytes per input cell and 4 per input vertex for the
+// cells around, 4 per input cell and 4 per appended cell for the
+// descendants.
+template <int N> class Around {
+public:
+  bool built() const { return !start_.empty(); }
+  // Over the cells [0, nc0) of `cells` and the vertices [0, nv0); nc0 * N
+  // must be below kNoCell. Each of `workers` threads reads every cell and
+  // writes the ranges of its share of the vertices, without atomics; each
+  // range is filled from its end, cells in decreasing order, so that it
+  // ends where it starts, in increasing order.
+  void build(const VertexId *cells, std::size_t nc0, std::size_t nv0, int workers) {
+    const std::size_t slots = nc0 * N;
+    start_.assign(nv0 + 1, 0);
+    around_ = std::make_unique_for_overwrite<CellId[]>(slots);
+    std::uint32_t *start = start_.data();
+    CellId *around = around_.get();
+#pragma omp parallel num_threads(workers)
+    {
+      const std::size_t t = std::size_t(omp_get_thread_num()),
+                        w = std::size_t(omp_get_num_threads());
+      const VertexId lo = VertexId(nv0 * t / w), hi = VertexId(nv0 * (t + 1) / w);
+      for (std::size_t s = 0; s < slots; ++s)
+        if (cells[s] - lo < hi - lo)
+          ++start[cells[s]];
+#pragma omp barrier
+#pragma omp single
+      {
+        std::uint32_t sum = 0;
+        for (std::size_t v = 0; v <= nv0; ++v)
+          start[v] = sum += start[v]; // the end of each vertex's range, for now
+      }
+      for (std::size_t s = slots; s-- > 0;)
+        if (cells[s] - lo < hi - lo)
+          around[--start[cells[s]]] = CellId(s / N);
+    }
+    first_.assign(nc0, kNoCell);
+    next_.clear();
+    nc0_ = nc0;
+  }
+  std::size_t count(VertexId v) const {
+    return start_[v + 1] - start_[v];
+  }
+  // Cell c, appended, descends from input cell `input`; cells are adopted
+  // in the order they were appended.
+  void adopt(CellId c, CellId input) {
+    next_.push_back(first_[input]);
+    first_[input] = c;
+  }
+  // f(c) for the input cells around input vertex v and their descendants.
+  template <class F> void for_each(VertexId v, F &&f) const {
+    for (std::uint32_t i = start_[v]; i < start_[v + 1]; ++i) {
+      const CellId o = around_[i];
+      f(o);
+      for (CellId d = first_[o]; d != kNoCell; d = next_[d - nc0_])
+        f(d);
+    }
+  }
+
+private:
+  std::vector<std::uint32_t> start_; // per input vertex, and one past: its range in around_
+  std::unique_ptr<CellId[]> around_;
+  std::vector<CellId> first_; // per input cell: its newest appended descendant
+  std::vector<CellId> next_;  // per appended cell: the next older one of its input cell
+  std::size_t nc0_ = 0;
+};
+
 struct LimitReached {};
 struct PrecisionReached {};
 struct Cancelled {};
@@ -395,9 +473,13 @@ public:
     try {
       std::vector<std::uint64_t> flag;     // per vertex: an end of an edge bisected in this pass
       std::vector<std::uint64_t> bisected; // per cell: bisected in this pass
+      std::vector<std::uint64_t> seen;     // per cell: found by walk_around() in this pass
       std::vector<std::vector<CellId>> found;
       if (!split.empty())
         add_split_edges(split, work, found);
+      const int walk = testing::walk_around();
+      if (walk >= 0 && (nc0_ >= kAroundFrom || walk > 0) && nc0_ * N < kNoCell)
+        around_.build(m_.cells.data(), nc0_, nv0_, threads());
       // Room for the whole iteration at once, about: see reserve().
       reserve(work.size(), 3 * work.size());
       while (!work.empty()) {
@@ -420,24 +502,28 @@ public:
         // The next pass: the cells with a bisected edge among those that can
         // have one, the cells just bisected (in their first child's slot),
         // the children just made, and every cell holding both ends of an
-        // edge bisected in this pass (ALGORITHMS §6). One test per block of
-        // cells on all threads, in cell order, so the order does not depend
-        // on the threads; nothing serial but marking the pass's cells and
-        // the ends of its edges (the candidates were gathered and deduplicated
-        // on one thread: 3D ball, two threads, a twentieth of refine).
-        if (m_.num_vertices() > verts_before) {
+        // edge bisected in this pass (ALGORITHMS §6), in cell order, so the
+        // order does not depend on the threads or on how they were found.
+        // The bits set here (bisected, flag, seen) are cleared again by the
+        // pass, so that no pass costs more than its work and what it reads.
+        bisected.resize(std::max(bisected.size(), (cells_before + 63) / 64), 0);
+        for (CellId c : work)
+          bisected[c >> 6] |= std::uint64_t(1) << (c & 63);
+        if (m_.num_vertices() > verts_before && walk_pays(verts_before, cells_before)) {
+          found.resize(1);
+          walk_around(verts_before, cells_before, work, bisected, seen, found[0]);
+          testing::count_walk();
+        } else if (m_.num_vertices() > verts_before) {
+          // Every cell is read, one test per block of cells on all threads;
+          // nothing serial but marking the pass's cells and the ends of its
+          // edges (the candidates were gathered and deduplicated on one
+          // thread: 3D ball, two threads, a twentieth of refine).
           // A bit per vertex: the scan below reads it for every cell of
           // every pass, and bits stay in cache where bytes did not (3D
           // ball, 12 iterations, 125 M cells scanned: 0.46 -> 0.37 s).
-          flag.assign((m_.num_vertices() + 63) / 64, 0);
-          for (std::size_t v = verts_before; v < m_.num_vertices(); ++v)
-            for (int k = 0; k < 2; ++k) {
-              const VertexId a = m_.parent_edge[2 * v + k];
-              flag[a >> 6] |= std::uint64_t(1) << (a & 63);
-            }
-          bisected.assign((cells_before + 63) / 64, 0);
-          for (CellId c : work)
-            bisected[c >> 6] |= std::uint64_t(1) << (c & 63);
+          flag.resize(std::max(flag.size(), (m_.num_vertices() + 63) / 64), 0);
+          for_each_new_end(verts_before,
+                           [&flag](VertexId a) { flag[a >> 6] |= std::uint64_t(1) << (a & 63); });
           const VertexId *cells = m_.cells.data();
           const std::uint64_t *ends_flag = flag.data(), *was_bisected = bisected.data();
           for_block_ranges(
@@ -455,15 +541,20 @@ public:
                 };
                 scan_flagged<N>(cells, lo, hi, ends_flag, was_bisected, keep);
               });
-          work.clear();
+          for_each_new_end(verts_before, [&flag](VertexId a) { flag[a >> 6] = 0; });
         } else {
           // No new midpoint: no cell but these has a new bisected edge.
           for_blocks(work.size(), found, [&](std::size_t i) { return has_hanging_edge(work[i]); });
           for (std::vector<CellId> &block : found)
             for (CellId &i : block)
               i = work[i];
-          work.clear();
         }
+        for (CellId c : work)
+          bisected[c >> 6] = 0;
+        work.clear();
+        if (around_.built())
+          for (std::size_t c = cells_before; c < m_.num_cells(); ++c)
+            around_.adopt(CellId(c), origin_[c - nc0_]);
         for (const std::vector<CellId> &block : found)
           work.insert(work.end(), block.begin(), block.end());
         const VertexId *children = m_.cells.data() + cells_before * N;
@@ -537,6 +628,90 @@ private:
           work.push_back(c);
         }
       }
+  }
+
+  // Calls f(a) for both ends of the edge of every vertex made since
+  // vertex `from`.
+  template <class F> void for_each_new_end(std::size_t from, F &&f) const {
+    for (std::size_t v = from; v < m_.num_vertices(); ++v) {
+      f(m_.parent_edge[2 * v]);
+      f(m_.parent_edge[2 * v + 1]);
+    }
+  }
+
+  // An input vertex such that every cell holding v descends from an input
+  // cell around it (Around): v itself for an input vertex, else the root of
+  // the first end of v's edge.
+  VertexId root(VertexId v) const {
+    while (v >= nv0_)
+      v = m_.parent_edge[2 * std::size_t(v)];
+    return v;
+  }
+  // Of the edge (a, b)'s two roots, the one with fewer input cells around.
+  VertexId fewer_around(VertexId a, VertexId b) const {
+    const VertexId ra = root(a), rb = root(b);
+    return around_.count(ra) <= around_.count(rb) ? ra : rb;
+  }
+
+  // Whether walk_around() should find the next pass's cells rather than a
+  // scan of every cell: when the cells it reads, about (the input cells
+  // around the edges' roots and as many descendants each as the input
+  // cells have on average), cost less than the scan's cells_before. One
+  // cell read by the walk was taken to cost kWalkCost cells scanned.
+  bool walk_pays(std::size_t verts_before, std::size_t cells_before) const {
+    if (!around_.built())
+      return false;
+    if (testing::walk_around() > 0)
+      return true;
+    const std::size_t budget = cells_before / kWalkCost;
+    const double per_input = double(m_.num_cells()) / double(nc0_);
+    double reads = 0;
+    for (std::size_t v = verts_before; v < m_.num_vertices(); ++v) {
+      reads +=
+          per_input *
+          double(around_.count(fewer_around(m_.parent_edge[2 * v], m_.parent_edge[2 * v + 1])));
+      if (reads > double(budget))
+        return false;
+    }
+    return true;
+  }
+
+  // The next pass's cells among [0, cells_before) (run()), without a scan:
+  // the cells bisected in this pass that still have a bisected edge, and
+  // each other cell holding both ends of an edge bisected in this pass,
+  // looked for among the descendants of the input cells around one root
+  // of the edge. `bisected` marks the pass's cells; `seen` is clear and is
+  // left clear. out: in increasing order, as the scan finds them.
+  void walk_around(std::size_t verts_before, std::size_t cells_before,
+                   const std::vector<CellId> &work, const std::vector<std::uint64_t> &bisected,
+                   std::vector<std::uint64_t> &seen, std::vector<CellId> &out) const {
+    out.clear();
+    seen.resize(std::max(seen.size(), (cells_before + 63) / 64), 0);
+    const VertexId *cells = m_.cells.data();
+    for (std::size_t v = verts_before; v < m_.num_vertices(); ++v) {
+      const VertexId a = m_.parent_edge[2 * v], b = m_.parent_edge[2 * v + 1];
+      around_.for_each(fewer_around(a, b), [&](CellId d) {
+        const std::uint64_t bit = std::uint64_t(1) << (d & 63);
+        if (d >= cells_before || ((bisected[d >> 6] | seen[d >> 6]) & bit))
+          return;
+        const VertexId *x = cells + std::size_t(d) * N;
+        bool has_a = false, has_b = false;
+        for (int i = 0; i < N; ++i) {
+          has_a |= x[i] == a;
+          has_b |= x[i] == b;
+        }
+        if (has_a && has_b) {
+          seen[d >> 6] |= bit;
+          out.push_back(d);
+        }
+      });
+    }
+    for (CellId c : out)
+      seen[c >> 6] = 0;
+    for (CellId c : work)
+      if (has_hanging_edge(c))
+        out.push_back(c);
+    std::sort(out.begin(), out.end());
   }
 
   // found[k] = the indices i in block k of [0, n) (blocks of kBlock) for
@@ -741,6 +916,14 @@ private:
     return threads() > 1 && count >= kParallelPass;
   }
   static constexpr std::size_t kParallelPass = std::size_t(1) << 13;
+  // Around is built for an input of this many cells or more; below, every
+  // pass scans. Building costs ~30 ns an input cell on one thread (3D),
+  // and each pass that walks saves about a scan (1.5-3 ns a cell); small
+  // iterations have too few such passes (3D ball, 12 iterations: ~10 of
+  // its ~20 passes each; one thread no faster, two slower, with Around in
+  // every iteration), large ones many (14 iterations: ~40 of ~44).
+  static constexpr std::size_t kAroundFrom = std::size_t(1) << 21;
+  static constexpr std::size_t kWalkCost = 8;
 
   // Bisects every cell of `work` (distinct cells) as bisect() would one after
   // the other, on all threads, with the same result to the bit: the
@@ -1009,6 +1192,7 @@ private:
   bool logging_ = false;
   MidpointMap mids_;
   std::vector<CellId> origin_;         // per appended cell: the input cell it descends from
+  Around<N> around_;                   // built for an input of kAroundFrom cells or more
   std::vector<std::uint8_t> endpoint_; // per vertex: 1 if an end of an edge bisected so far
   std::vector<UndoEntry> log_;
   std::vector<std::uint64_t> logged_;        // per input cell, when logging: 1 once in log_
@@ -1053,6 +1237,8 @@ std::atomic<int> g_parallel_bisection{0};
 std::atomic<int> g_midpoint_room{0};
 std::atomic<std::size_t> g_midpoint_retries{0};
 std::atomic<bool> g_vector_scan{true}; // wanted; on where the processor has AVX2
+std::atomic<int> g_walk_around{0};
+std::atomic<std::size_t> g_walks{0};
 bool has_avx2() {
 #ifdef BISECT_SCAN_AVX2
   static const bool yes = [] {
@@ -1084,6 +1270,19 @@ void count_midpoint_retry() {
 std::size_t midpoint_retries() {
   return g_midpoint_retries;
 }
+void set_walk_around(int mode) {
+  g_walk_around = mode;
+}
+int walk_around() {
+  return g_walk_around;
+}
+void count_walk() {
+  g_walks.fetch_add(1, std::memory_order_relaxed);
+}
+std::size_t walks() {
+  return g_walks;
+}
+
 bool set_vector_scan(bool on) {
   g_vector_scan = on;
   return vector_scan();

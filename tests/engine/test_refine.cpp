@@ -487,6 +487,13 @@ TEST_CASE("refine with edges to split: bisecting the edges a selection bisected 
       REQUIRE(!r.limit_reached);
       REQUIRE_CONFORMING(split, inv);
       REQUIRE(cells_by_coordinates(split) == cells_by_coordinates(serial));
+      // The same mesh when the closure walks around the split edges' cells
+      // in every pass instead of scanning.
+      testing::set_walk_around(1);
+      Mesh walked = m0;
+      refine(walked, {}, edges);
+      testing::set_walk_around(0);
+      require_same_mesh(walked, split);
       // The split edges are gone: no cell holds both ends of one.
       bool held = false;
       for (std::size_t c = 0; c < split.num_cells(); ++c)
@@ -631,6 +638,29 @@ TEST_CASE("vector scan: the closure's scan eight cells at a time gives the one-a
                     REQUIRE_CONFORMING(one, inv);
                   });
   testing::set_vector_scan(true);
+}
+
+TEST_CASE("walk around: finding the next pass's cells around each bisected edge gives the "
+          "scan's mesh bit for bit",
+          "[refine][2d][3d][4d]") {
+  std::size_t walks = testing::walks();
+  for_each_marked(kernel_cases(true),
+                  [&](const KernelCase &c, const Mesh &m, const Invariants &inv) {
+                    testing::set_walk_around(-1);
+                    const Mesh scanned = run_kernel(m, c.region, c.iterations, -1, 1);
+                    REQUIRE(testing::walks() == walks);
+                    testing::set_walk_around(1);
+                    for (int threads : {1, 2}) {
+                      INFO(threads << " threads");
+                      const Mesh walked = run_kernel(m, c.region, c.iterations, 0, threads);
+                      require_same_mesh(walked, scanned);
+                      REQUIRE(testing::walks() >= walks + std::size_t(c.iterations));
+                      walks = testing::walks();
+                    }
+                    REQUIRE(scanned.num_cells() > 2 * m.num_cells());
+                    REQUIRE_CONFORMING(scanned, inv);
+                  });
+  testing::set_walk_around(0);
 }
 
 TEST_CASE("parallel kernel: a cell past 65535 generations is refused as in the serial loop",
