@@ -478,7 +478,7 @@ public:
       if (!split.empty())
         add_split_edges(split, work, found);
       const int walk = testing::walk_around();
-      if (walk >= 0 && (nc0_ >= kAroundFrom || walk > 0) && nc0_ * N < kNoCell)
+      if (walk >= 0 && ((Dim == 3 && nc0_ >= kAroundFrom) || walk > 0) && nc0_ * N < kNoCell)
         around_.build(m_.cells.data(), nc0_, nv0_, threads());
       // Room for the whole iteration at once, about: see reserve().
       reserve(work.size(), 3 * work.size());
@@ -916,13 +916,17 @@ private:
     return threads() > 1 && count >= kParallelPass;
   }
   static constexpr std::size_t kParallelPass = std::size_t(1) << 13;
-  // Around is built for an input of this many cells or more; below, every
-  // pass scans. Building costs ~30 ns an input cell on one thread (3D),
-  // and each pass that walks saves about a scan (1.5-3 ns a cell); small
-  // iterations have too few such passes (3D ball, 12 iterations: ~10 of
-  // its ~20 passes each; one thread no faster, two slower, with Around in
-  // every iteration), large ones many (14 iterations: ~40 of ~44).
-  static constexpr std::size_t kAroundFrom = std::size_t(1) << 21;
+  // Around is built for a 3D input of this many cells or more; otherwise
+  // every pass scans. Building costs ~33 ns an input tet on one thread; the
+  // passes that walk instead of scanning saved 20-32 ns an input tet in
+  // iterations from 0.35 to 3.7 M tets and 54 in one of 6.3 M, where more
+  // of its passes walk and a scan reads more of the cells from memory (Gmsh's
+  // 49,090-tet ball, 12 iterations around the hemisphere, one thread, each
+  // pass timed both ways). In 2D and 4D it never paid: the iterations
+  // saved 10-16 ns an input triangle (a scan reads 12 bytes a cell) and
+  // 3-13 ns an input pentatope (4D iterations have 4 to 8 passes, against
+  // 14 to 25 in 3D).
+  static constexpr std::size_t kAroundFrom = std::size_t(1) << 22;
   static constexpr std::size_t kWalkCost = 8;
 
   // Bisects every cell of `work` (distinct cells) as bisect() would one after
@@ -1192,7 +1196,7 @@ private:
   bool logging_ = false;
   MidpointMap mids_;
   std::vector<CellId> origin_;         // per appended cell: the input cell it descends from
-  Around<N> around_;                   // built for an input of kAroundFrom cells or more
+  Around<N> around_;                   // built for a 3D input of kAroundFrom cells or more
   std::vector<std::uint8_t> endpoint_; // per vertex: 1 if an end of an edge bisected so far
   std::vector<UndoEntry> log_;
   std::vector<std::uint64_t> logged_;        // per input cell, when logging: 1 once in log_

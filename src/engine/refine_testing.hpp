@@ -28,8 +28,8 @@ bool set_vector_scan(bool on);
 // How the closure finds the cells holding both ends of an edge a pass
 // bisected (Refiner::run in refine.cpp): 0 (the default) by walking the
 // cells around the edge's root (Around) in the passes where that costs
-// less than a scan of every cell, for an input of kAroundFrom cells or
-// more; 1 by walking in every pass that makes midpoints, for any input;
+// less than a scan of every cell, for a 3D input of kAroundFrom cells
+// or more; 1 by walking in every pass that makes midpoints, for any input;
 // -1 always by the scan. The result must be the same bit for bit.
 void set_walk_around(int mode);
 std::size_t walks(); // passes that walked, so far
