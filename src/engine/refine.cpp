@@ -387,6 +387,13 @@ public:
   std::size_t count(VertexId v) const {
     return start_[v + 1] - start_[v];
   }
+  // Room for the descendants of `cells` cells in all (the input's and the
+  // appended ones), made once when the cell arrays grow rather than by
+  // doubling, which kept a copy alive.
+  void expect(std::size_t cells) {
+    if (cells > nc0_ && next_.capacity() < cells - nc0_)
+      next_.reserve(cells - nc0_);
+  }
   // Cell c, appended, descends from input cell `input`; cells are adopted
   // in the order they were appended.
   void adopt(CellId c, CellId input) {
@@ -552,9 +559,11 @@ public:
         for (CellId c : work)
           bisected[c >> 6] = 0;
         work.clear();
-        if (around_.built())
+        if (around_.built()) {
+          around_.expect(m_.cells.capacity() / N);
           for (std::size_t c = cells_before; c < m_.num_cells(); ++c)
             around_.adopt(CellId(c), origin_[c - nc0_]);
+        }
         for (const std::vector<CellId> &block : found)
           work.insert(work.end(), block.begin(), block.end());
         const VertexId *children = m_.cells.data() + cells_before * N;
