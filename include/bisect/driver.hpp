@@ -54,6 +54,11 @@ struct DriverOptions {
   // 0's values (and if memory runs out rebuilding them, the arrays are
   // dropped).
   bool cell_data_by_origin = false;
+  // What the caller already has of the mesh as passed, so that
+  // run_iterations does not walk it again: its invariants (all of them, as
+  // prepare_input's InputFacts has them) and its quality summary.
+  const Invariants *input_invariants = nullptr;
+  const QualitySummary *input_quality = nullptr;
 };
 
 // One finished iteration.

@@ -174,12 +174,14 @@ run_iterations(Mesh &mesh, const Selector &select, const DriverOptions &options,
   DriverResult result;
   // The invariants every check compares with (the Euler characteristic only
   // for the full check: it is the costly part).
-  const Invariants before = measure_invariants(mesh, options.check_every_iteration);
+  const Invariants before = options.input_invariants
+                                ? *options.input_invariants
+                                : measure_invariants(mesh, options.check_every_iteration);
   RefineLimits limits;
   if (options.max_cells)
     limits.max_cells = options.max_cells;
   limits.cancel = options.cancel;
-  result.quality = quality_summary(mesh);
+  result.quality = options.input_quality ? *options.input_quality : quality_summary(mesh);
   // The final check's cell pass, taken with the last planned iteration's
   // quality when nothing can change the mesh between the two.
   const bool final_check = options.final_check && !options.check_every_iteration;

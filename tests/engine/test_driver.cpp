@@ -65,6 +65,43 @@ TEST_CASE("driver: a read-only callback lets the last quality pass take the fina
   }
 }
 
+TEST_CASE("driver: the input's invariants and quality given by the caller replace its own "
+          "passes: the same mesh and result, and the final check compares with them",
+          "[driver][2d][3d][4d]") {
+  for (int dim : {2, 3, 4}) {
+    INFO("dim " << dim);
+    const Mesh start = marked_kuhn(dim);
+    DriverOptions options;
+    options.iterations = 3;
+    Mesh measured = start;
+    const DriverResult a = run_iterations(measured, corner, options);
+    const Invariants inv = measure_invariants(start, true);
+    const QualitySummary q0 = quality_summary(start);
+    options.input_invariants = &inv;
+    options.input_quality = &q0;
+    Mesh given = start;
+    const DriverResult b = run_iterations(given, corner, options);
+    CHECK(given.cells == measured.cells);
+    CHECK(given.coords == measured.coords);
+    CHECK(b.quality.mean == a.quality.mean);
+    CHECK(b.iterations == a.iterations);
+    // The quality given is the result's when no iteration runs.
+    QualitySummary made_up = q0;
+    made_up.mean = 0.125;
+    options.input_quality = &made_up;
+    options.iterations = 0;
+    Mesh unchanged = start;
+    CHECK(run_iterations(unchanged, corner, options).quality.mean == 0.125);
+    options.iterations = 3;
+    // Invariants that are not the mesh's fail the final check.
+    Invariants wrong = inv;
+    wrong.volume *= 2;
+    options.input_invariants = &wrong;
+    Mesh m = start;
+    CHECK_THROWS_AS(run_iterations(m, corner, options), CheckError);
+  }
+}
+
 TEST_CASE("driver: a callback that may change the mesh is checked after it: a cell flattened "
           "in place in the last iteration's callback is found",
           "[driver][2d][3d][4d]") {
