@@ -928,13 +928,13 @@ private:
   // Around is built for a 3D input of this many cells or more; otherwise
   // every pass scans. Building costs ~33 ns an input tet on one thread; the
   // passes that walk instead of scanning saved 20-32 ns an input tet in
-  // iterations from 0.35 to 3.7 M tets and 54 in one of 6.3 M, where more
-  // of its passes walk and a scan reads more of the cells from memory (Gmsh's
-  // 49,090-tet ball, 12 iterations around the hemisphere, one thread, each
-  // pass timed both ways). In 2D and 4D it never paid: the iterations
-  // saved 10-16 ns an input triangle (a scan reads 12 bytes a cell) and
-  // 3-13 ns an input pentatope (4D iterations have 4 to 8 passes, against
-  // 14 to 25 in 3D).
+  // iterations from 0.25 to 3.7 M tets, 54 in one of 6.3 M, 34 in one of
+  // 10.8 M and 171 in one of 18.3 M with 65 passes (Gmsh's 49,090-tet ball,
+  // 12 and 14 iterations around the hemisphere, one thread, each pass timed
+  // both ways; README). In 2D and 4D it never paid: the iterations saved
+  // 10-16 ns an input triangle (a scan reads 12 bytes a cell) and 3-13 ns
+  // an input pentatope (4D iterations have 4 to 8 passes, against 14 to 65
+  // in 3D).
   static constexpr std::size_t kAroundFrom = std::size_t(1) << 22;
   static constexpr std::size_t kWalkCost = 8;
 
