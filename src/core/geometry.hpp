@@ -78,13 +78,18 @@ template <int Dim> double signed_volume(const double *verts) {
 //   det S   = det A / det W,  det W = sqrt(n+1) / 2^(n/2).
 // This is exactly q = n |det S|^(2/n) / |S|_F^2, written so that it does not
 // depend on the vertex order (tests compare it with an explicit A W^-1).
-// `det` is edge_determinant<Dim>(verts), for callers that have it already.
-template <int Dim> double mean_ratio_t(const double *verts, double det) {
-  constexpr int n = Dim;
+// mean_ratio_of takes det = edge_determinant<Dim>(verts) and sum_sq =
+// squared_edge_sum<Dim>(verts), for callers that have them already.
+template <int Dim> double squared_edge_sum(const double *verts) {
   double sum_sq = 0;
-  for (int i = 0; i <= n; ++i)
-    for (int j = i + 1; j <= n; ++j)
+  for (int i = 0; i <= Dim; ++i)
+    for (int j = i + 1; j <= Dim; ++j)
       sum_sq += squared_distance<Dim>(verts + i * Dim, verts + j * Dim);
+  return sum_sq;
+}
+
+template <int Dim> double mean_ratio_of(double det, double sum_sq) {
+  constexpr int n = Dim;
   if (!(sum_sq > 0))
     return 0;
   const double det_w = std::sqrt(double(n + 1)) / std::pow(2.0, 0.5 * n);
@@ -98,6 +103,10 @@ template <int Dim> double mean_ratio_t(const double *verts, double det) {
     r_2n = std::cbrt(r * r);
   const double frob_sq = 2.0 / (n + 1) * sum_sq;
   return n * r_2n / frob_sq;
+}
+
+template <int Dim> double mean_ratio_t(const double *verts, double det) {
+  return mean_ratio_of<Dim>(det, squared_edge_sum<Dim>(verts));
 }
 
 template <int Dim> double mean_ratio_t(const double *verts) {

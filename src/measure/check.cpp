@@ -1433,33 +1433,49 @@ double cell_pass(const Mesh &mesh, std::size_t &first_degenerate, double &its_vo
         continue;
       }
     }
-    // The loop, with or without the quality summary.
+    // The loop, with or without the quality summary. With the quality, cells
+    // go kBatch at a time: their determinants and edge sums first, then
+    // their mean ratios, whose cube roots (3D) and square roots (4D) are long
+    // chains of dependent steps. A loop of them alone keeps several cells'
+    // chains in flight; one gathering points between them did not (3D
+    // benchmark, 13 iterations, one thread: the quality stage 2.6 -> 1.6 s;
+    // a cube root in a third of glibc's time gained nothing more).
     auto walk = [&]<bool Quality, bool Check>() {
+      constexpr std::size_t kBatch = Quality ? 16 : 1;
       double q_min = 1e300, q_max = -1e300, q_total = 0;
-      for (std::size_t c = k * kBlock; c < end; ++c) {
-        if (c + kAhead < end)
-          geometry::prefetch_points<Dim>(mesh, CellId(c + kAhead));
-        gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
-        const double det = geometry::edge_determinant<Dim>(pts);
-        if constexpr (Quality) {
-          const double q = geometry::mean_ratio_t<Dim>(pts, det);
-          q_min = std::min(q_min, q);
-          q_max = std::max(q_max, q);
-          q_total += q;
-        }
-        if constexpr (Check) {
-          const double v = det / geometry::factorial(Dim); // geometry::signed_volume
-          total += std::abs(v);
-          // Above the bound for the longest possible edge no cell is
-          // degenerate: the cell's own edges are needed only below it.
-          const bool bad = !(std::abs(v) > any_edge_bound) && degenerate<Dim>(pts, v);
-          if (signs && !bad)
-            (*signs)[c] = v > 0 ? 1 : -1;
-          if (bad && first[k] == std::size_t(-1)) {
-            first[k] = c;
-            first_volume[k] = v;
+      double dets[kBatch], sums_sq[kBatch];
+      for (std::size_t c0 = k * kBlock; c0 < end; c0 += kBatch) {
+        const std::size_t c1 = std::min(end, c0 + kBatch);
+        for (std::size_t c = c0; c < c1; ++c) {
+          if (c + kAhead < end)
+            geometry::prefetch_points<Dim>(mesh, CellId(c + kAhead));
+          gather<Dim>(mesh, mesh.cell(CellId(c)), Dim + 1, pts);
+          const double det = geometry::edge_determinant<Dim>(pts);
+          if constexpr (Quality) {
+            dets[c - c0] = det;
+            sums_sq[c - c0] = geometry::squared_edge_sum<Dim>(pts);
+          }
+          if constexpr (Check) {
+            const double v = det / geometry::factorial(Dim); // geometry::signed_volume
+            total += std::abs(v);
+            // Above the bound for the longest possible edge no cell is
+            // degenerate: the cell's own edges are needed only below it.
+            const bool bad = !(std::abs(v) > any_edge_bound) && degenerate<Dim>(pts, v);
+            if (signs && !bad)
+              (*signs)[c] = v > 0 ? 1 : -1;
+            if (bad && first[k] == std::size_t(-1)) {
+              first[k] = c;
+              first_volume[k] = v;
+            }
           }
         }
+        if constexpr (Quality)
+          for (std::size_t i = 0; i < c1 - c0; ++i) {
+            const double q = geometry::mean_ratio_of<Dim>(dets[i], sums_sq[i]);
+            q_min = std::min(q_min, q);
+            q_max = std::max(q_max, q);
+            q_total += q;
+          }
       }
       if constexpr (Quality) {
         q_lo[k] = q_min;
