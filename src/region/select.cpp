@@ -59,9 +59,44 @@ std::vector<CellId> select_touching(const Mesh &mesh, const Region &region,
   std::vector<std::vector<CellId>> found(blocks);
   const int workers =
       region.concurrent() ? int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads()))) : 1;
+  // The cells' points are scattered over the coordinates: a batch of
+  // kBatch cells has its points read first (the reads wait for memory
+  // together), then its cells are tested, in order.
+  constexpr std::size_t kBatch = 16;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 2)
   for (std::size_t k = 0; k < blocks; ++k) {
     double pts[5 * 4];
+    CellId batch[kBatch];
+    std::size_t batched = 0;
+    auto test_batch = [&] {
+      double touched = 0;
+      for (std::size_t j = 0; j < batched; ++j) {
+        const VertexId *x = mesh.cell(batch[j]);
+        for (int i = 0; i < nv; ++i)
+          touched += mesh.point(x[i])[0];
+      }
+      asm volatile("" ::"x"(touched)); // the reads happen
+      for (std::size_t j = 0; j < batched; ++j) {
+        const VertexId *x = mesh.cell(batch[j]);
+        bool outside = false;
+        for (int d = 0; d < dim && !outside; ++d) {
+          double a = mesh.point(x[0])[d], b = a;
+          for (int i = 1; i < nv; ++i) {
+            double v = mesh.point(x[i])[d];
+            a = std::min(a, v);
+            b = std::max(b, v);
+          }
+          outside = b < lo[d] || a > hi[d];
+        }
+        if (outside)
+          continue;
+        for (int i = 0; i < nv; ++i)
+          std::copy(mesh.point(x[i]), mesh.point(x[i]) + dim, pts + i * dim);
+        if (region.touches(pts, dim))
+          found[k].push_back(batch[j]);
+      }
+      batched = 0;
+    };
     for (std::size_t c = k * kBlock; c < std::min(nc, (k + 1) * kBlock); ++c) {
       if (candidates) {
         const std::size_t w = c >> 6;
@@ -76,24 +111,11 @@ std::vector<CellId> select_touching(const Mesh &mesh, const Region &region,
         if (c >= std::min(nc, (k + 1) * kBlock))
           break;
       }
-      const VertexId *x = mesh.cell(CellId(c));
-      bool outside = false;
-      for (int d = 0; d < dim && !outside; ++d) {
-        double a = mesh.point(x[0])[d], b = a;
-        for (int i = 1; i < nv; ++i) {
-          double v = mesh.point(x[i])[d];
-          a = std::min(a, v);
-          b = std::max(b, v);
-        }
-        outside = b < lo[d] || a > hi[d];
-      }
-      if (outside)
-        continue;
-      for (int i = 0; i < nv; ++i)
-        std::copy(mesh.point(x[i]), mesh.point(x[i]) + dim, pts + i * dim);
-      if (region.touches(pts, dim))
-        found[k].push_back(CellId(c));
+      batch[batched++] = CellId(c);
+      if (batched == kBatch)
+        test_batch();
     }
+    test_batch();
   }
   std::size_t total = 0;
   for (const auto &f : found)
