@@ -136,12 +136,7 @@ int run_refine(const RefineArgs &a) {
   // reference) and, for a file with a bisection state, the interior facets
   // the state's consistency check visits: none of them is walked again.
   InputFacts facts;
-  facts.want_interior = std::any_of(mesh.cell_data.begin(), mesh.cell_data.end(),
-                                    [](const DataArray &d) { return d.name == kMarkingArray; });
-  prepare_input(mesh, a.input, progress, &facts);
-  const bool continued =
-      decode_state(mesh, a.input, facts.want_interior ? &facts.interior : nullptr);
-  facts.interior = {};
+  const bool continued = prepare_read_mesh(mesh, a.input, progress, facts);
   if (continued) {
     if (marking && *marking != mesh.marking && !quiet)
       std::cerr << "bisect: " << a.input << " carries bisection state with --marking "

@@ -67,6 +67,14 @@ void check_output_format(const std::string &name, int dim, const std::string &fo
 Mesh load_mesh(const std::string &path, const LoadProgress &progress = {},
                InputFacts *facts = nullptr);
 
+// What load_mesh does after the read, for a caller that read `mesh` from
+// `path` itself (read_mesh): validates it and restores its bisection state,
+// walking its facets once (the state's consistency check takes the interior
+// facets validation found). Returns whether the mesh carried a state
+// (decode_state in state.hpp). `facts` receives the invariants.
+bool prepare_read_mesh(Mesh &mesh, const std::string &path, const LoadProgress &progress,
+                       InputFacts &facts);
+
 // Writes `mesh` with its bisection state (the bisect:* cell arrays, so that
 // refining the file continues the same sequence) through a temporary file
 // renamed when complete. The mesh is the same when it returns.

@@ -255,21 +255,26 @@ void check_output_format(const std::string &name, int dim, const std::string &fo
     throw InputError(name, "a .msh file cannot hold a 4D mesh; write .vtu");
 }
 
+bool prepare_read_mesh(Mesh &mesh, const std::string &path, const LoadProgress &progress,
+                       InputFacts &facts) {
+  // The state's consistency check visits the interior facets, which
+  // validation walks anyway: it records them when the file has a state.
+  facts.want_interior = std::any_of(mesh.cell_data.begin(), mesh.cell_data.end(),
+                                    [](const DataArray &a) { return a.name == kMarkingArray; });
+  prepare_input(mesh, path, progress, &facts);
+  if (progress)
+    progress("restoring the bisection state", 0.95);
+  const bool restored = decode_state(mesh, path, facts.want_interior ? &facts.interior : nullptr);
+  facts.interior = {};
+  return restored;
+}
+
 Mesh load_mesh(const std::string &path, const LoadProgress &progress, InputFacts *facts) {
   if (progress)
     progress("reading", 0.0);
   Mesh mesh = read_mesh(path);
-  // The state's consistency check visits the interior facets, which
-  // validation walks anyway: it records them when the file has a state.
   InputFacts local;
-  InputFacts &f = facts ? *facts : local;
-  f.want_interior = std::any_of(mesh.cell_data.begin(), mesh.cell_data.end(),
-                                [](const DataArray &a) { return a.name == kMarkingArray; });
-  prepare_input(mesh, path, progress, &f);
-  if (progress)
-    progress("restoring the bisection state", 0.95);
-  decode_state(mesh, path, f.want_interior ? &f.interior : nullptr);
-  f.interior = {};
+  prepare_read_mesh(mesh, path, progress, facts ? *facts : local);
   return mesh;
 }
 
