@@ -384,6 +384,17 @@ TEST_CASE("coarsen: the tree survives a .vtu and a .msh file", "[coarsen][io]") 
       coarsen_all(back, 0);
       REQUIRE(cell_shapes(back) == cell_shapes(k.mesh));
     }
+    // Generations and levels past 255 come back as they were.
+    for (std::uint16_t &g : m.generation)
+      g = std::uint16_t(g + 300);
+    for (std::uint16_t &l : m.level)
+      l = l == 0 ? l : std::uint16_t(l + 300); // made vertices
+
+    const std::string path = (dir / "high.vtu").string();
+    save_mesh(path, m);
+    Mesh back = load_mesh(path);
+    CHECK(back.generation == m.generation);
+    CHECK(back.level == m.level);
   }
   std::filesystem::remove_all(dir);
 }
