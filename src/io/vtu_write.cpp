@@ -18,6 +18,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -37,6 +38,19 @@ constexpr std::size_t kBlock = 32768; // VTK's default block size
 
 // Buffered output with base64 encoding; write errors are kept and reported
 // once, naming the file.
+// The two base64 digits of every 12-bit value: a group of three bytes is
+// two lookups.
+struct Base64Pairs {
+  std::array<std::array<char, 2>, 4096> digits;
+  constexpr Base64Pairs() : digits() {
+    constexpr const char *kDigits =
+        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    for (unsigned v = 0; v < 4096; ++v)
+      digits[v] = {kDigits[v >> 6], kDigits[v & 63]};
+  }
+};
+constexpr Base64Pairs kPairs;
+
 class Writer {
 public:
   explicit Writer(const std::string &path) : path_(path), file_(std::fopen(path.c_str(), "wb")) {
@@ -62,24 +76,39 @@ public:
       flush();
   }
 
-  // base64 of `n` bytes, continuing the current base64 stream.
+  // base64 of `n` bytes, continuing the current base64 stream. Whole groups
+  // of three bytes are encoded straight into the buffer (two lookups in
+  // kPairs a group), a piece of at most kBuffer characters at a time:
+  // appending four characters a group, each looked up, with a size check
+  // each, took ~1.6% of the 3D benchmark's 13 iterations on one thread, this
+  // ~0.6%, and the encoding is serial.
   void base64(const unsigned char *p, std::size_t n) {
-    while (n > 0) {
-      if (carry_n_ > 0 || n < 3) {
-        carry_[carry_n_++] = *p++;
-        --n;
-        if (carry_n_ == 3) {
-          encode3(carry_);
-          carry_n_ = 0;
-        }
-        continue;
+    while (n > 0 && carry_n_ > 0) {
+      carry_[carry_n_++] = *p++;
+      --n;
+      if (carry_n_ == 3) {
+        encode3(carry_);
+        carry_n_ = 0;
       }
-      const std::size_t whole = n / 3 * 3;
-      for (std::size_t i = 0; i < whole; i += 3)
-        encode3(p + i);
-      p += whole;
-      n -= whole;
     }
+    for (std::size_t whole = n / 3 * 3; whole > 0;) {
+      const std::size_t take = std::min(whole, kBuffer / 4 * 3);
+      const std::size_t at = buf_.size();
+      buf_.resize(at + take / 3 * 4);
+      char *out = buf_.data() + at;
+      for (std::size_t i = 0; i < take; i += 3, out += 4) {
+        const unsigned v = unsigned(p[i]) << 16 | unsigned(p[i + 1]) << 8 | unsigned(p[i + 2]);
+        std::memcpy(out, kPairs.digits[v >> 12].data(), 2);
+        std::memcpy(out + 2, kPairs.digits[v & 4095].data(), 2);
+      }
+      p += take;
+      n -= take;
+      whole -= take;
+      if (buf_.size() >= kBuffer)
+        flush();
+    }
+    for (; n > 0; --n) // at most two bytes left: the next call's first group
+      carry_[carry_n_++] = *p++;
   }
   // Ends a base64 stream (with '=' padding).
   void end_base64() {
