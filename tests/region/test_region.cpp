@@ -3,6 +3,9 @@
 // simplex), bounds(), and the errors of the JSON spec reader.
 #include "bisect/region.hpp"
 
+#include "bisect/generate.hpp"
+#include "bisect/measure.hpp"
+
 #include "bisect/mesh.hpp"
 
 #include <catch2/catch.hpp>
@@ -743,4 +746,37 @@ TEST_CASE("sphere: a sphere far smaller than a cell selects the cell holding its
           CHECK_FALSE(region->touches(far.data(), dim));
         }
     }
+}
+
+TEST_CASE("select_touching keeps exactly the cells whose simplex touches the region, in order",
+          "[region][2d][3d][4d]") {
+  // The selection reads cells in batches of 16; a cell count that is not a
+  // multiple of it, with and without candidates (every third cell), against
+  // touches() asked cell by cell.
+  const int dim = GENERATE(2, 3, 4);
+  const Mesh m = generate_kuhn(dim, dim == 2 ? 7 : 3); // 98, 162, 1944 cells
+  const std::string centre = dim == 2   ? "[0.5, 0.5]"
+                             : dim == 3 ? "[0.5, 0.5, 0.5]"
+                                        : "[0.5, 0.5, 0.5, 0.5]";
+  const auto region =
+      spec(R"({"type": "sphere", "center": )" + centre + R"(, "radius": 0.3})", dim);
+  std::vector<std::uint64_t> candidates((m.num_cells() + 63) / 64, 0);
+  for (std::size_t c = 0; c < m.num_cells(); c += 3)
+    candidates[c / 64] |= std::uint64_t(1) << (c % 64);
+  std::vector<CellId> all, among;
+  std::vector<double> p((dim + 1) * dim);
+  for (std::size_t c = 0; c < m.num_cells(); ++c) {
+    cell_points(m, CellId(c), p.data());
+    if (region->touches(p.data(), dim)) {
+      all.push_back(CellId(c));
+      if (c % 3 == 0)
+        among.push_back(CellId(c));
+    }
+  }
+  INFO("dim " << dim << ", " << m.num_cells() << " cells, " << all.size() << " touch");
+  REQUIRE(m.num_cells() % 16 != 0);
+  REQUIRE(all.size() > 16);
+  REQUIRE(all.size() < m.num_cells());
+  CHECK(select_touching(m, *region) == all);
+  CHECK(select_touching(m, *region, &candidates) == among);
 }
