@@ -36,21 +36,21 @@ namespace {
 
 constexpr std::size_t kBlock = 32768; // VTK's default block size
 
-// Buffered output with base64 encoding; write errors are kept and reported
-// once, naming the file.
+constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+
 // The two base64 digits of every 12-bit value: a group of three bytes is
 // two lookups.
 struct Base64Pairs {
   std::array<std::array<char, 2>, 4096> digits;
   constexpr Base64Pairs() : digits() {
-    constexpr const char *kDigits =
-        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     for (unsigned v = 0; v < 4096; ++v)
       digits[v] = {kDigits[v >> 6], kDigits[v & 63]};
   }
 };
 constexpr Base64Pairs kPairs;
 
+// Buffered output with base64 encoding; write errors are kept and reported
+// once, naming the file.
 class Writer {
 public:
   explicit Writer(const std::string &path) : path_(path), file_(std::fopen(path.c_str(), "wb")) {
@@ -112,7 +112,6 @@ public:
   }
   // Ends a base64 stream (with '=' padding).
   void end_base64() {
-    static const char *kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     if (carry_n_ == 1) {
       const unsigned v = unsigned(carry_[0]) << 16;
       buf_ += kDigits[v >> 18 & 63];
@@ -148,7 +147,6 @@ public:
   }
   // The base64 text of `n` bytes (one whole stream, padded).
   static std::string base64_text(const unsigned char *p, std::size_t n) {
-    static const char *kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     std::string out;
     for (std::size_t i = 0; i < n; i += 3) {
       const std::size_t k = std::min<std::size_t>(3, n - i);
@@ -180,7 +178,6 @@ private:
   static constexpr std::size_t kBuffer = std::size_t(1) << 20;
 
   void encode3(const unsigned char *p) {
-    static const char *kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     const unsigned v = unsigned(p[0]) << 16 | unsigned(p[1]) << 8 | unsigned(p[2]);
     const char out[4] = {kDigits[v >> 18 & 63], kDigits[v >> 12 & 63], kDigits[v >> 6 & 63],
                          kDigits[v & 63]};
