@@ -522,7 +522,9 @@ public:
       if (!split.empty())
         add_split_edges(split, work, found);
       const int walk = testing::walk_around();
-      if (walk >= 0 && ((Dim == 3 && nc0_ >= kAroundFrom) || walk > 0) && nc0_ * N < kNoCell)
+      // Nothing to bisect (a region that selects nothing): nothing to walk.
+      if (!work.empty() && walk >= 0 && ((Dim == 3 && nc0_ >= kAroundFrom) || walk > 0) &&
+          nc0_ * N < kNoCell)
         around_.build(m_.cells.data(), nc0_, nv0_, threads());
       // Room for the whole iteration at once, about: see reserve().
       reserve(work.size(), 3 * work.size());
