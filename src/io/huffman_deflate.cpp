@@ -199,14 +199,15 @@ Plan plan(const unsigned char *data, std::size_t n) {
 class BitWriter {
 public:
   explicit BitWriter(unsigned char *at) : at_(at) {}
+  // At most 32 bits at a time.
   void put(std::uint64_t value, int bits) {
     buf_ |= value << filled_;
     filled_ += bits;
-    if (filled_ >= 48) {
-      std::memcpy(at_, &buf_, 8); // 2 bytes past what is kept: room is left
-      at_ += 6;
-      buf_ >>= 48;
-      filled_ -= 48;
+    if (filled_ >= 32) {
+      std::memcpy(at_, &buf_, 8); // 4 bytes past what is kept: room is left
+      at_ += 4;
+      buf_ >>= 32;
+      filled_ -= 32;
     }
   }
   unsigned char *finish() {
@@ -246,7 +247,13 @@ void zlib_compress(const unsigned char *data, std::size_t n, std::vector<unsigne
     if (s.extra_bits)
       w.put(s.extra, s.extra_bits);
   }
-  for (std::size_t i = 0; i < n; ++i)
+  // Two literals a time (codes of at most 15 bits each).
+  std::size_t i = 0;
+  for (; i + 2 <= n; i += 2) {
+    const unsigned char a = data[i], b = data[i + 1];
+    w.put(p.code[a] | std::uint64_t(p.code[b]) << p.len[a], p.len[a] + p.len[b]);
+  }
+  if (i < n)
     w.put(p.code[data[i]], p.len[data[i]]);
   w.put(p.code[kEndOfBlock], p.len[kEndOfBlock]);
   unsigned char *end = w.finish();
