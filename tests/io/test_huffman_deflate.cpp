@@ -34,13 +34,13 @@ void require_round_trip(const std::vector<unsigned char> &data) {
   libdeflate_free_decompressor(d);
   REQUIRE(rc == LIBDEFLATE_SUCCESS);
   REQUIRE(got == data.size());
-  REQUIRE(std::memcmp(back.data(), data.data(), data.size()) == 0);
+  REQUIRE((data.empty() || std::memcmp(back.data(), data.data(), data.size()) == 0));
   // zlib, which VTK and Python's zlib (meshio) use.
   std::vector<unsigned char> back2(data.size() + 1, 0xCD);
   uLongf len = uLongf(back2.size());
   REQUIRE(uncompress(back2.data(), &len, z.data(), uLong(z.size())) == Z_OK);
   REQUIRE(len == data.size());
-  REQUIRE(std::memcmp(back2.data(), data.data(), data.size()) == 0);
+  REQUIRE((data.empty() || std::memcmp(back2.data(), data.data(), data.size()) == 0));
 }
 
 std::uint64_t next(std::uint64_t &s) {
