@@ -1,8 +1,8 @@
 // A zlib stream of one deflate block that codes every byte as a literal
 // with its own Huffman code (no matches), for the .vtu writer's blocks
 // whose bytes look random to deflate's match search but are far from
-// uniform byte by byte: a refined mesh's connectivity (vertex ids whose
-// high bytes repeat) and offsets (4, 8, 12, ...). Any zlib reader reads it.
+// uniform byte by byte, such as a refined mesh's connectivity (vertex ids
+// whose high bytes repeat). Any zlib reader reads it.
 #pragma once
 
 #include <cstddef>

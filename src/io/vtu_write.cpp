@@ -327,10 +327,9 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
     // A group whose first block's bytes, each coded alone with a Huffman
     // code of their own, come within a quarter of deflate's size has its
     // other blocks so coded (Coding::Literals): deflate's search for
-    // matches finds few in a refined mesh's connectivity (0.66 of its size,
-    // ~110 MB/s on this project's machine) and the literals alone make
-    // 0.77 of it several times faster; offsets (4, 8, 12, ...) come to less
-    // than deflate's 0.61.
+    // matches finds few in a refined mesh's connectivity (0.66 of its size
+    // at ~100 MB/s on this project's machine, timed in a scratch harness)
+    // and the literals alone make 0.78 of it at ~450 MB/s.
     //
     // One thread encodes and writes group g - 1 while the others compress
     // group g (two sets of block buffers), so the serial base64 and write
@@ -358,7 +357,7 @@ void write_array(Writer &w, VtuCompression compression, int level, const std::st
           packed.insert(packed.end(), tmp.begin(), tmp.end());
       }
     };
-    std::size_t pending = blocks; // the first block of the group compressed but not written
+    std::size_t pending = blocks; // first block of the group compressed, not yet written (none)
     for (std::size_t g0 = 0; g0 < blocks; g0 += kGroup) {
       const std::size_t g1 = std::min(blocks, g0 + kGroup);
       std::vector<std::vector<unsigned char>> &fill = out[(g0 / kGroup) % 2];
