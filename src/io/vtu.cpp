@@ -73,7 +73,7 @@ const CellKind *linear_cell(int type) {
 void check_cell_types(const std::string &path, const vtu::Grid &g) {
   for (std::size_t c = 0; c < g.num_cells; ++c) {
     const int type = g.types[c];
-    const std::int64_t n = g.offsets[c + 1] - g.offsets[c];
+    const std::int64_t n = g.offsets[c] - g.begin(c);
     const CellKind *kind = linear_cell(type);
     if (kind && kind->dim >= 0 && (kind->variable ? n >= kind->ids : n == kind->ids))
       continue;
@@ -141,7 +141,7 @@ KeptCells select_cells_4d(const std::string &path, const vtu::Grid &g) {
   kept.dim = 4;
   for (std::size_t c = 0; c < g.num_cells; ++c) {
     const int type = g.types[c];
-    const std::int64_t npts = g.offsets[c + 1] - g.offsets[c];
+    const std::int64_t npts = g.offsets[c] - g.begin(c);
     if (type == kPolyVertex || type == kConvexPointSet) {
       if (npts != 5)
         throw InputError(path, "4D mesh: cell " + std::to_string(c) + " has " +
@@ -269,7 +269,7 @@ std::vector<Entities> entity_blocks(const vtu::Grid &g, const KeptCells &kept,
     block.dim = d;
     block.vertices.reserve(ids.size() * std::size_t(d + 1));
     for (CellId c : ids) {
-      const std::uint32_t *pts = g.connectivity.data() + g.offsets[c];
+      const std::uint32_t *pts = g.connectivity.data() + g.begin(c);
       for (int k = 0; k <= d; ++k)
         block.vertices.push_back(new_id[pts[k]]); // kNoVertex: not a face
     }
@@ -333,7 +333,7 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
   const int nvc = kept.dim + 1;
   std::vector<VertexId> new_id(np, kNoVertex);
   for (CellId c : kept.ids) {
-    const std::uint32_t *pts = g.connectivity.data() + g.offsets[c];
+    const std::uint32_t *pts = g.connectivity.data() + g.begin(c);
     for (int i = 0; i < nvc; ++i) {
       for (int j = 0; j < i; ++j)
         if (pts[j] == pts[i])
@@ -363,7 +363,7 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
     // before any is written.
     VertexId *to = g.connectivity.data();
     for (CellId c : kept.ids) {
-      const std::uint32_t *pts = g.connectivity.data() + g.offsets[c];
+      const std::uint32_t *pts = g.connectivity.data() + g.begin(c);
       VertexId ids[5];
       for (int i = 0; i < nvc; ++i)
         ids[i] = new_id[pts[i]];

@@ -1425,11 +1425,13 @@ private:
     // Concatenate, point ids and offsets shifted past the earlier pieces.
     const auto point_base = std::uint32_t(g.num_points);
     const auto conn_base = std::int64_t(g.connectivity.size());
-    if (index == 0)
-      g.offsets.push_back(0);
-    g.offsets.reserve(g.offsets.size() + offsets.size());
-    for (std::int64_t o : offsets)
-      g.offsets.push_back(o + conn_base);
+    if (g.offsets.empty()) {
+      g.offsets = std::move(offsets); // conn_base is 0
+    } else {
+      g.offsets.reserve(g.offsets.size() + offsets.size());
+      for (std::int64_t o : offsets)
+        g.offsets.push_back(o + conn_base);
+    }
     if (point_base == 0) {
       if (g.connectivity.empty())
         g.connectivity = std::move(conn);
