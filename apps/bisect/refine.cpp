@@ -129,14 +129,15 @@ int run_refine(const RefineArgs &a) {
   StageSeconds stages;
   auto t0 = std::chrono::steady_clock::now();
   const LoadProgress progress = load_progress(a.input, quiet);
-  Mesh mesh = read_mesh(a.input);
+  StoredState stored; // the state's arrays in their file types, beside the mesh
+  Mesh mesh = read_mesh(a.input, stored);
   stages.read = seconds_since(t0);
   t0 = std::chrono::steady_clock::now();
   // Validation's walks give the input's invariants (the final check's
   // reference) and, for a file with a bisection state, the interior facets
   // the state's consistency check visits: none of them is walked again.
   InputFacts facts;
-  const bool continued = prepare_read_mesh(mesh, a.input, progress, facts);
+  const bool continued = prepare_read_mesh(mesh, a.input, progress, facts, &stored);
   if (continued) {
     if (marking && *marking != mesh.marking && !quiet)
       std::cerr << "bisect: " << a.input << " carries bisection state with --marking "

@@ -4,6 +4,7 @@
 
 #include "bisect/check.hpp"
 #include "bisect/mesh.hpp"
+#include "bisect/state.hpp"
 
 #include <cstdint>
 #include <string>
@@ -19,6 +20,11 @@ namespace bisect {
 // point data become DataArrays; Gmsh tags become cell arrays
 // "gmsh:physical" and "gmsh:geometrical". Throws InputError naming the file.
 Mesh read_mesh(const std::string &path);
+// The same, except that a binary .vtu's bisection state arrays go into
+// `stored` in their file types (StoredState in state.hpp), not into the
+// mesh's DataArrays: for prepare_read_mesh, in less memory. Other files
+// leave `stored` empty.
+Mesh read_mesh(const std::string &path, StoredState &stored);
 
 // How a mesh is written.
 enum class Compression { None, Zlib, Lz4 };
@@ -71,9 +77,10 @@ Mesh load_mesh(const std::string &path, const LoadProgress &progress = {},
 // `path` itself (read_mesh): validates it and restores its bisection state,
 // walking its facets once (the state's consistency check takes the interior
 // facets validation found). Returns whether the mesh carried a state
-// (decode_state in state.hpp). `facts` receives the invariants.
+// (decode_state in state.hpp). `facts` receives the invariants. `stored`:
+// what read_mesh(path, stored) kept apart (emptied).
 bool prepare_read_mesh(Mesh &mesh, const std::string &path, const LoadProgress &progress,
-                       InputFacts &facts);
+                       InputFacts &facts, StoredState *stored = nullptr);
 
 // Writes `mesh` with its bisection state (the bisect:* cell arrays, so that
 // refining the file continues the same sequence) through a temporary file
@@ -84,6 +91,7 @@ void save_mesh(const std::string &path, Mesh &mesh, const WriteOptions &options 
 Mesh read_msh(const std::string &path);
 void write_msh(const std::string &path, const Mesh &mesh);
 Mesh read_vtu(const std::string &path);
+Mesh read_vtu(const std::string &path, StoredState &stored); // see read_mesh
 // A .pvtu (what a distributed refine writes, or ParaView): its pieces read
 // as .vtu files and merged into one mesh (read_mesh takes .pvtu too). Points
 // in several pieces become one vertex: by the point array bisect:global_id

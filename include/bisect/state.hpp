@@ -4,7 +4,9 @@
 #include "bisect/mesh.hpp"
 
 #include <array>
+#include <cstdint>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace bisect {
@@ -86,9 +88,39 @@ void encode_tree(Mesh &mesh);
 // integer in range, parent ids not both -1 or both smaller than the vertex
 // and distinct, or a vertex that is not the midpoint of its parent edge
 // (relative 1e-6 of the edge's extent). Returns whether the arrays were there.
-bool decode_tree(Mesh &mesh, const std::string &path);
+// `stored`: where the arrays are when not in the mesh's data (emptied).
+struct StoredState; // below
+bool decode_tree(Mesh &mesh, const std::string &path, StoredState *stored = nullptr);
 // Removes the tree arrays from the data (the mesh's tree fields stay).
 void strip_tree(Mesh &mesh);
+
+// The state's arrays as a .vtu stores them, beside the mesh instead of in
+// its DataArrays: bisect:state, bisect:marking, bisect:generation (cells),
+// bisect:parent_a, bisect:parent_b, bisect:level (points), each in its
+// file type (Int8, UInt8, Int16, UInt16 or Int32: 1 to 4 bytes a value,
+// where a DataArray holds 8). read_mesh(path, stored) fills it from a
+// binary .vtu and prepare_read_mesh / decode_state use it: on a refined
+// 31 M-tet file that is 0.7 GB less memory at the read's and the
+// validation's peak. Arrays of other types, in ASCII or in other formats
+// stay DataArrays; decode_state takes each array from either place.
+struct StoredArray {
+  std::string name;
+  int components = 1;
+  ValueType type = ValueType::Int32; // the file's
+  std::variant<std::vector<std::int8_t>, std::vector<std::uint8_t>, std::vector<std::int16_t>,
+               std::vector<std::uint16_t>, std::vector<std::int32_t>>
+      values; // tuples * components, as for DataArray
+  std::size_t size() const {
+    return std::visit([](const auto &v) { return v.size(); }, values);
+  }
+  double operator[](std::size_t i) const {
+    return std::visit([i](const auto &v) { return double(v[i]); }, values);
+  }
+};
+struct StoredState {
+  std::vector<StoredArray> cells, points;
+  bool empty() const { return cells.empty() && points.empty(); }
+};
 
 // Before writing: orients every cell positively in `cells` and stores the
 // tuple as the `bisect:*` cell arrays (tuple[i] = cell[order[i]]).
@@ -100,9 +132,11 @@ void encode_state(Mesh &mesh);
 // present but invalid: a value out of range (marking, stage, tag, order not a
 // permutation, edge ranks), or a state that is inconsistent (see
 // check_state_consistency).
-// `interior`: as for check_state_consistency.
+// `interior`: as for check_state_consistency. `stored`: where the arrays
+// are when not in the mesh's data (StoredState; emptied).
 bool decode_state(Mesh &mesh, const std::string &path,
-                  const std::vector<std::vector<std::array<CellId, 2>>> *interior = nullptr);
+                  const std::vector<std::vector<std::array<CellId, 2>>> *interior = nullptr,
+                  StoredState *stored = nullptr);
 // After writing an encoded mesh: restores the tuples encode_state reordered
 // and removes the bisect:* arrays, so the mesh is as before encode_state.
 void strip_state(Mesh &mesh);

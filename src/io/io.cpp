@@ -197,6 +197,19 @@ Mesh read_mesh(const std::string &path) {
   return mesh;
 }
 
+Mesh read_mesh(const std::string &path, StoredState &stored) {
+  stored = {};
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  if (path == "-" || ext != ".vtu")
+    return read_mesh(path);
+  check_readable_file(path);
+  Mesh mesh = read_vtu(path, stored);
+  settle_plane(mesh, path, Format::Vtu);
+  return mesh;
+}
+
 static Format format_named(const std::string &name, const std::string &format) {
   if (format.empty())
     return format_of(name);
@@ -256,15 +269,18 @@ void check_output_format(const std::string &name, int dim, const std::string &fo
 }
 
 bool prepare_read_mesh(Mesh &mesh, const std::string &path, const LoadProgress &progress,
-                       InputFacts &facts) {
+                       InputFacts &facts, StoredState *stored) {
   // The state's consistency check visits the interior facets, which
   // validation walks anyway: it records them when the file has a state.
-  facts.want_interior = std::any_of(mesh.cell_data.begin(), mesh.cell_data.end(),
-                                    [](const DataArray &a) { return a.name == kMarkingArray; });
+  const auto marking = [](const auto &a) { return a.name == kMarkingArray; };
+  facts.want_interior =
+      std::any_of(mesh.cell_data.begin(), mesh.cell_data.end(), marking) ||
+      (stored && std::any_of(stored->cells.begin(), stored->cells.end(), marking));
   prepare_input(mesh, path, progress, &facts);
   if (progress)
     progress("restoring the bisection state", 0.95);
-  const bool restored = decode_state(mesh, path, facts.want_interior ? &facts.interior : nullptr);
+  const bool restored =
+      decode_state(mesh, path, facts.want_interior ? &facts.interior : nullptr, stored);
   facts.interior = {};
   return restored;
 }
@@ -272,9 +288,10 @@ bool prepare_read_mesh(Mesh &mesh, const std::string &path, const LoadProgress &
 Mesh load_mesh(const std::string &path, const LoadProgress &progress, InputFacts *facts) {
   if (progress)
     progress("reading", 0.0);
-  Mesh mesh = read_mesh(path);
+  StoredState stored;
+  Mesh mesh = read_mesh(path, stored);
   InputFacts local;
-  prepare_read_mesh(mesh, path, progress, facts ? *facts : local);
+  prepare_read_mesh(mesh, path, progress, facts ? *facts : local, &stored);
   return mesh;
 }
 

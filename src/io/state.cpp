@@ -201,10 +201,18 @@ void strip_state(Mesh &mesh) {
 }
 
 bool decode_state(Mesh &mesh, const std::string &path,
-                  const std::vector<std::vector<std::array<CellId, 2>>> *interior) {
+                  const std::vector<std::vector<std::array<CellId, 2>>> *interior,
+                  StoredState *stored) {
+  StoredState none;
+  if (!stored)
+    stored = &none;
+  // bisect:state and bisect:marking may be stored apart (StoredState); the
+  // older form's arrays and the edge ranks are always DataArrays.
+  const StateColumn marking = StateColumn::find(mesh.cell_data, &stored->cells, kMarkingArray),
+                    packed_column = StateColumn::find(mesh.cell_data, &stored->cells, kStateArray);
   int io = find_array(mesh.cell_data, kOrderArray), is = find_array(mesh.cell_data, kStageArray),
-      it = find_array(mesh.cell_data, kTagArray), im = find_array(mesh.cell_data, kMarkingArray),
-      ip = find_array(mesh.cell_data, kStateArray);
+      it = find_array(mesh.cell_data, kTagArray), im = marking ? 0 : -1,
+      ip = packed_column ? 0 : -1;
   // Two forms: bisect:state + bisect:marking (written since 0.2), or the
   // older bisect:order + bisect:stage + bisect:tag + bisect:marking.
   if (ip >= 0) {
@@ -219,6 +227,7 @@ bool decode_state(Mesh &mesh, const std::string &path,
   int present = (io >= 0) + (is >= 0) + (it >= 0) + (im >= 0);
   if (present == 0 && ip < 0) {
     strip_tree(mesh); // a tree without the state it belongs to means nothing
+    *stored = {};
     return false;
   }
   if (ip < 0 && present != 4)
@@ -227,16 +236,15 @@ bool decode_state(Mesh &mesh, const std::string &path,
                                ", " + kStageArray + ", " + kTagArray + ", " + kMarkingArray + ")");
   const int n = mesh.dim, nv = n + 1;
   const std::size_t nc = mesh.num_cells();
-  const DataArray &marking = mesh.cell_data[std::size_t(im)];
   const DataArray *order = io >= 0 ? &mesh.cell_data[std::size_t(io)] : nullptr;
   const DataArray *stage = is >= 0 ? &mesh.cell_data[std::size_t(is)] : nullptr;
   const DataArray *tag = it >= 0 ? &mesh.cell_data[std::size_t(it)] : nullptr;
-  const DataArray *packed = ip >= 0 ? &mesh.cell_data[std::size_t(ip)] : nullptr;
+  const StateColumn *packed = ip >= 0 ? &packed_column : nullptr;
   if ((order && order->components != nv) || (stage && stage->components != 1) ||
-      (tag && tag->components != 1) || (packed && packed->components != 1) ||
-      marking.components != 1)
+      (tag && tag->components != 1) || (packed && packed->components() != 1) ||
+      marking.components() != 1)
     throw InputError(path, "bisection state arrays have the wrong number of components");
-  double m0 = nc ? marking.values[0] : 0;
+  double m0 = nc ? marking[0] : 0;
   if (!(m0 == 0 || m0 == 1 || m0 == 2 || m0 == 3))
     throw InputError(path, std::string(kMarkingArray) + " must be 0, 1, 2 or 3");
   mesh.marking = Marking(int(m0));
@@ -274,12 +282,12 @@ bool decode_state(Mesh &mesh, const std::string &path,
       return InputError(path,
                         cell_name(mesh, CellId(c)) + ": invalid bisection state (" + what + ")");
     };
-    if (marking.values[c] != m0)
+    if (marking[c] != m0)
       throw bad("mixed " + std::string(kMarkingArray));
     double s, t;
     int perm[5];
     if (packed) {
-      const double v = packed->values[c];
+      const double v = (*packed)[c];
       if (!(v >= 0 && v < 4096 && v == std::floor(v)))
         throw bad(std::string(kStateArray) + " out of range");
       const int w = int(v);
@@ -337,11 +345,16 @@ bool decode_state(Mesh &mesh, const std::string &path,
     throw InputError(path, "the bisection state is inconsistent (" + why +
                                "): the file was not written by bisect as it is, or was altered "
                                "(cell order, connectivity or bisect:* arrays)");
-  for (int i : {io, is, it, im, ir, ip})
+  for (int i : {io, is, it, ir})
     if (i >= 0)
       mesh.cell_data[i].name.clear();
-  std::erase_if(mesh.cell_data, [](const DataArray &a) { return a.name.empty(); });
-  decode_tree(mesh, path);
+  std::erase_if(mesh.cell_data, [](const DataArray &a) {
+    return a.name.empty() || a.name == kStateArray || a.name == kMarkingArray;
+  });
+  std::erase_if(stored->cells, [](const StoredArray &a) {
+    return a.name == kStateArray || a.name == kMarkingArray;
+  });
+  decode_tree(mesh, path, stored);
   return true;
 }
 

@@ -51,4 +51,35 @@ void tree_sources(const Mesh &mesh, std::vector<ArraySource> &cells,
 // A source's values as a stored array of `rows` tuples.
 DataArray materialize(const ArraySource &source, std::size_t rows);
 
+// A bisect:* array where the reader left it: among the mesh's DataArrays or
+// in a StoredState (looked in first). False when in neither.
+class StateColumn {
+public:
+  static StateColumn find(const std::vector<DataArray> &data,
+                          const std::vector<StoredArray> *stored, const char *name) {
+    StateColumn c;
+    if (stored)
+      for (const StoredArray &a : *stored)
+        if (a.name == name) {
+          c.s_ = &a;
+          return c;
+        }
+    for (const DataArray &a : data)
+      if (a.name == name) {
+        c.d_ = &a;
+        return c;
+      }
+    return c;
+  }
+  explicit operator bool() const { return d_ || s_; }
+  const std::string &name() const { return d_ ? d_->name : s_->name; }
+  int components() const { return d_ ? d_->components : s_->components; }
+  std::size_t size() const { return d_ ? d_->values.size() : s_->size(); }
+  double operator[](std::size_t i) const { return d_ ? d_->values[i] : (*s_)[i]; }
+
+private:
+  const DataArray *d_ = nullptr;
+  const StoredArray *s_ = nullptr;
+};
+
 } // namespace bisect

@@ -35,20 +35,20 @@ bool is_tree_array(const DataArray &a) {
 }
 
 // The array's values as integers in [lo, hi]; InputError naming the entity.
-void check_integers(const Mesh &mesh, const DataArray &a, std::size_t count, double lo, double hi,
+void check_integers(const Mesh &mesh, const StateColumn &a, std::size_t count, double lo, double hi,
                     const char *entity, const std::string &path) {
-  if (a.components != 1)
-    throw InputError(path,
-                     a.name + " has " + std::to_string(a.components) + " components; expected 1");
-  if (a.values.size() != count)
-    throw InputError(path, a.name + " has " + std::to_string(a.values.size()) + " values for " +
+  if (a.components() != 1)
+    throw InputError(path, a.name() + " has " + std::to_string(a.components()) +
+                               " components; expected 1");
+  if (a.size() != count)
+    throw InputError(path, a.name() + " has " + std::to_string(a.size()) + " values for " +
                                std::to_string(count) + " " + entity + "s");
   for (std::size_t i = 0; i < count; ++i) {
-    const double v = a.values[i];
+    const double v = a[i];
     if (!(v >= lo && v <= hi && v == std::floor(v)))
       throw InputError(path, (entity == std::string("cell") ? cell_name(mesh, CellId(i))
                                                             : vertex_name(mesh, VertexId(i))) +
-                                 ": " + a.name + " holds " + std::to_string(v) +
+                                 ": " + a.name() + " holds " + std::to_string(v) +
                                  ", not an integer in " +
                                  std::to_string(static_cast<long long>(lo)) + ".." +
                                  std::to_string(static_cast<long long>(hi)));
@@ -103,16 +103,33 @@ void strip_tree(Mesh &mesh) {
   std::erase_if(mesh.point_data, is_tree_array);
 }
 
-bool decode_tree(Mesh &mesh, const std::string &path) {
-  const DataArray *generation = find(mesh.cell_data, kGenerationArray);
-  const DataArray *pa = find(mesh.point_data, kParentAArray),
-                  *pb = find(mesh.point_data, kParentBArray),
-                  *level = find(mesh.point_data, kLevelArray);
+bool decode_tree(Mesh &mesh, const std::string &path, StoredState *stored) {
+  StoredState none;
+  if (!stored)
+    stored = &none;
+  // Each array among the mesh's DataArrays or in `stored`; either way
+  // removed on return (also when refused: the exception ends the read).
+  struct Drop {
+    Mesh &mesh;
+    StoredState &stored;
+    ~Drop() {
+      strip_tree(mesh);
+      const auto tree = [](const StoredArray &a) {
+        return a.name == kGenerationArray || a.name == kParentAArray || a.name == kParentBArray ||
+               a.name == kLevelArray;
+      };
+      std::erase_if(stored.cells, tree);
+      std::erase_if(stored.points, tree);
+    }
+  } drop{mesh, *stored};
+  const StateColumn generation =
+      StateColumn::find(mesh.cell_data, &stored->cells, kGenerationArray);
+  const StateColumn pa = StateColumn::find(mesh.point_data, &stored->points, kParentAArray),
+                    pb = StateColumn::find(mesh.point_data, &stored->points, kParentBArray),
+                    level = StateColumn::find(mesh.point_data, &stored->points, kLevelArray);
   mesh.clear_tree();
-  if (!generation && !pa && !pb) {
-    strip_tree(mesh); // a lone bisect:level means nothing
-    return false;
-  }
+  if (!generation && !pa && !pb)
+    return false; // a lone bisect:level means nothing
   if (!pa != !pb)
     throw InputError(path, std::string("point arrays ") + kParentAArray + " and " + kParentBArray +
                                " come together; only " + (pa ? kParentAArray : kParentBArray) +
@@ -123,17 +140,17 @@ bool decode_tree(Mesh &mesh, const std::string &path) {
     // No bisection sequence doubles resolve is deeper than kMaxGeneration
     // (the precision limit stops any edge after about 1,100 halvings, dim
     // generations each); a deeper value is not bisect's and would overflow.
-    check_integers(mesh, *generation, nc, 0, kMaxGeneration, "cell", path);
+    check_integers(mesh, generation, nc, 0, kMaxGeneration, "cell", path);
     for (std::size_t c = 0; c < nc; ++c)
-      gen[c] = std::uint16_t(generation->values[c]);
+      gen[c] = std::uint16_t(generation[c]);
   }
   std::vector<VertexId> parents(2 * nv, kNoVertex);
   if (pa) {
     const double top = double(nv) - 1;
-    check_integers(mesh, *pa, nv, -1, top, "vertex", path);
-    check_integers(mesh, *pb, nv, -1, top, "vertex", path);
+    check_integers(mesh, pa, nv, -1, top, "vertex", path);
+    check_integers(mesh, pb, nv, -1, top, "vertex", path);
     for (std::size_t v = 0; v < nv; ++v) {
-      const double a = pa->values[v], b = pb->values[v];
+      const double a = pa[v], b = pb[v];
       auto bad = [&](const std::string &what) {
         return InputError(path, vertex_name(mesh, VertexId(v)) + ": " + kParentAArray + " " +
                                     std::to_string(static_cast<long long>(a)) + ", " +
@@ -165,10 +182,10 @@ bool decode_tree(Mesh &mesh, const std::string &path) {
   // it is only a hint for coarsening, whose merges are all checked).
   std::vector<std::uint16_t> levels;
   if (level) {
-    check_integers(mesh, *level, nv, 0, std::numeric_limits<std::uint16_t>::max(), "vertex", path);
+    check_integers(mesh, level, nv, 0, std::numeric_limits<std::uint16_t>::max(), "vertex", path);
     levels.resize(nv);
     for (std::size_t v = 0; v < nv; ++v) {
-      levels[v] = std::uint16_t(level->values[v]);
+      levels[v] = std::uint16_t(level[v]);
       if ((levels[v] == 0) != (parents[2 * v] == kNoVertex))
         throw InputError(path,
                          vertex_name(mesh, VertexId(v)) + ": " + kLevelArray + " " +
@@ -177,7 +194,6 @@ bool decode_tree(Mesh &mesh, const std::string &path) {
                                              : " (made by bisection) but it has no parent edge"));
     }
   }
-  strip_tree(mesh);
   mesh.generation = std::move(gen);
   mesh.level = std::move(levels);
   mesh.parent_edge = std::move(parents);

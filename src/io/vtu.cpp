@@ -241,6 +241,28 @@ DataArray take_rows(vtu::Array &a, const std::string &name, const std::vector<Ro
   return out;
 }
 
+// take_rows in place for an array read in its file type (vtu::Array::ints).
+template <class Row>
+StoredArray take_stored_rows(vtu::Array &a, const std::string &name, const std::vector<Row> &rows) {
+  StoredArray out;
+  out.name = name;
+  out.components = a.components;
+  out.type = value_type_named(a.type);
+  std::visit(
+      [&](auto &v) {
+        const std::size_t k = std::size_t(a.components);
+        auto *to = v.data();
+        if (rows.size() * k != v.size())
+          for (Row r : rows)
+            for (std::size_t j = 0; j < k; ++j)
+              *to++ = v[std::size_t(r) * k + j];
+        v.resize(rows.size() * k);
+      },
+      a.ints);
+  out.values = std::move(a.ints);
+  return out;
+}
+
 // The 4th coordinate array of the 4D convention, checked.
 const vtu::Array &time_array(const std::string &path, const vtu::Grid &g) {
   const vtu::Array *t = find_array(g.point_data, "t");
@@ -318,7 +340,9 @@ void add_physical_names(const vtu::Grid &g, Mesh &mesh) {
   }
 }
 
-Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
+// `stored`: receives the arrays read as vtu::Array::ints (read_grid's
+// keep_state_types).
+Mesh grid_to_mesh(const std::string &path, vtu::Grid g, StoredState *stored = nullptr) {
   check_cell_types(path, g);
   const bool four = is_4d(g);
   const std::size_t np = g.num_points;
@@ -405,12 +429,17 @@ Mesh grid_to_mesh(const std::string &path, vtu::Grid g) {
     vtu::Array &a = g.point_data[i];
     if ((four && &a == t) || !a.numeric)
       continue;
-    mesh.point_data.push_back(take_rows(a, array_name(a, i), used, true));
+    if (a.stored)
+      stored->points.push_back(take_stored_rows(a, array_name(a, i), used));
+    else
+      mesh.point_data.push_back(take_rows(a, array_name(a, i), used, true));
   }
   add_entities(path, g, kept, std::move(blocks), mesh); // before the cell arrays are moved
   for (std::size_t i = 0; i < g.cell_data.size(); ++i) {
     vtu::Array &a = g.cell_data[i];
-    if (a.numeric)
+    if (a.stored)
+      stored->cells.push_back(take_stored_rows(a, array_name(a, i), kept.ids));
+    else if (a.numeric)
       mesh.cell_data.push_back(take_rows(a, array_name(a, i), kept.ids, true));
   }
   add_physical_names(g, mesh);
@@ -456,6 +485,11 @@ void check_mesh_for_writing(const std::string &path, const Mesh &mesh) {
 
 Mesh read_vtu(const std::string &path) {
   return grid_to_mesh(path, vtu::read_grid(path));
+}
+
+Mesh read_vtu(const std::string &path, StoredState &stored) {
+  stored = {};
+  return grid_to_mesh(path, vtu::read_grid(path, true), &stored);
 }
 
 void write_vtu(const std::string &path, const Mesh &mesh, Compression compression) {

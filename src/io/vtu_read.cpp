@@ -46,6 +46,7 @@
 #include <set>
 #include <string_view>
 #include <type_traits>
+#include <utility>
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -793,8 +794,14 @@ D narrow(V v, std::uint64_t index, const std::string &label, const std::string &
     if (bad && !bad->any)
       bad->any = true, bad->first = std::to_string(v);
     return kBadId;
+  } else if constexpr (!std::is_same_v<D, std::uint8_t>) {
+    // A StoredState array in its file's type (D is that type: the value fits).
+    static_assert(std::is_same_v<D, std::int8_t> || std::is_same_v<D, std::int16_t> ||
+                  std::is_same_v<D, std::uint16_t> || std::is_same_v<D, std::int32_t>);
+    if (!std::in_range<D>(v))
+      throw InputError(path, label + ": value " + str(index) + " is out of range");
+    return static_cast<D>(v);
   } else {
-    static_assert(std::is_same_v<D, std::uint8_t>);
     bool ok = std::uint64_t(v) <= 255;
     if constexpr (std::is_signed_v<V>)
       ok = v >= 0 && v <= 255;
@@ -1149,8 +1156,8 @@ std::uint64_t parse_count(const std::string &path, const Element &e, const char 
 
 class GridReader {
 public:
-  GridReader(const std::string &path, const Document &doc)
-      : path_(path), doc_(doc), arrays_(path, doc, format_) {}
+  GridReader(const std::string &path, const Document &doc, bool keep_state_types)
+      : path_(path), doc_(doc), arrays_(path, doc, format_), keep_state_types_(keep_state_types) {}
 
   Grid read() {
     const Element &root = doc_.elements[0];
@@ -1176,6 +1183,8 @@ public:
     }
     if (pieces.empty())
       fail("<UnstructuredGrid> has no <Piece>");
+    // (Pieces are appended as doubles: the stored form only for one piece.)
+    keep_state_types_ = keep_state_types_ && pieces.size() == 1;
     for (std::size_t p = 0; p < pieces.size(); ++p)
       read_piece(g, *pieces[p], p, pieces.size());
     return g;
@@ -1291,7 +1300,7 @@ private:
   std::vector<Array> read_field_data(const Element &e) const {
     std::vector<Array> out;
     for (const ArraySpec &a : specs(e, "field data", "")) {
-      Array arr{a.name, a.components, a.numeric, {}, std::string(info(a.type).name)};
+      Array arr{a.name, a.components, a.numeric, {}, std::string(info(a.type).name), false, {}};
       if (a.numeric) {
         std::uint64_t want = kAnyCount;
         if (a.tuples && *a.tuples <= kAnyCount / std::uint64_t(a.components))
@@ -1316,11 +1325,36 @@ private:
     out.reserve(all.size());
     for (const ArraySpec &a : all) {
       Array &arr = out.emplace_back(
-          Array{a.name, a.components, a.numeric, {}, std::string(info(a.type).name)});
-      if (a.numeric)
-        steps.add([&arr, a, tuples,
-                   this] { arr.values = arrays_.read<double>(a, times(tuples, a.components)); },
-                  times(tuples, a.components));
+          Array{a.name, a.components, a.numeric, {}, std::string(info(a.type).name), false, {}});
+      if (!a.numeric)
+        continue;
+      const std::uint64_t n = times(tuples, a.components);
+      if (keep_state_types_ && kept_in_state(a.name, what == "cell data")) {
+        arr.stored = true;
+        auto read_as = [&]<class T>() {
+          steps.add([&arr, a, n, this] { arr.ints = arrays_.read<T>(a, n); }, n);
+        };
+        switch (a.type) {
+        case Scalar::Int8:
+          read_as.template operator()<std::int8_t>();
+          continue;
+        case Scalar::UInt8:
+          read_as.template operator()<std::uint8_t>();
+          continue;
+        case Scalar::Int16:
+          read_as.template operator()<std::int16_t>();
+          continue;
+        case Scalar::UInt16:
+          read_as.template operator()<std::uint16_t>();
+          continue;
+        case Scalar::Int32:
+          read_as.template operator()<std::int32_t>();
+          continue;
+        default:
+          arr.stored = false; // other types as doubles
+        }
+      }
+      steps.add([&arr, a, n, this] { arr.values = arrays_.read<double>(a, n); }, n);
     }
   }
 
@@ -1487,22 +1521,31 @@ private:
            " ids, but the offsets end at " + std::to_string(start));
   }
 
+  // The arrays a StoredState takes (state.hpp), by name and place.
+  static bool kept_in_state(const std::string &name, bool cell) {
+    if (cell)
+      return name == kStateArray || name == kMarkingArray || name == kGenerationArray;
+    return name == kParentAArray || name == kParentBArray || name == kLevelArray;
+  }
+
   const std::string &path_;
   const Document &doc_;
   FileFormat format_;
   ArrayReader arrays_;
+  bool keep_state_types_ = false;
 };
 
 } // namespace
 
-Grid parse_grid(const std::string &path, const char *data, std::size_t size) {
+Grid parse_grid(const std::string &path, const char *data, std::size_t size,
+                bool keep_state_types) {
   const Document doc = XmlParser(path, data, size).parse();
-  return GridReader(path, doc).read();
+  return GridReader(path, doc, keep_state_types).read();
 }
 
-Grid read_grid(const std::string &path) {
+Grid read_grid(const std::string &path, bool keep_state_types) {
   const FileBytes file(path);
-  return parse_grid(path, file.data(), file.size());
+  return parse_grid(path, file.data(), file.size(), keep_state_types);
 }
 
 } // namespace bisect::vtu

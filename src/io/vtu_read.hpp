@@ -8,6 +8,8 @@
 // caller (io_vtu.cpp).
 #pragma once
 
+#include "bisect/state.hpp"
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -23,6 +25,10 @@ struct Array {
   bool numeric = true;
   std::vector<double> values; // tuples * components, component fastest
   std::string type;           // as in the file: "Int32", "Float64", ...
+  // Read in the file's own integer type into `ints` instead of `values`
+  // (read_grid's `keep_state_types`, for the arrays StoredState holds).
+  bool stored = false;
+  decltype(StoredArray::values) ints;
 };
 
 struct Grid {
@@ -40,9 +46,12 @@ struct Grid {
 
 // Reads `path`; throws InputError(path, one line) on anything it cannot
 // read exactly.
-Grid read_grid(const std::string &path);
+// With `keep_state_types`, the binary arrays a StoredState holds (by name;
+// Int8, UInt8, Int16, UInt16 or Int32) are read as Array::ints.
+Grid read_grid(const std::string &path, bool keep_state_types = false);
 
 // Same, from bytes already in memory (`path` only names them in errors).
-Grid parse_grid(const std::string &path, const char *data, std::size_t size);
+Grid parse_grid(const std::string &path, const char *data, std::size_t size,
+                bool keep_state_types = false);
 
 } // namespace bisect::vtu

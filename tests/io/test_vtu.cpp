@@ -724,3 +724,178 @@ TEST_CASE("vtu: the bisection state made while writing gives the same file as en
       CHECK(back.num_cells() == mesh.num_cells());
     }
 }
+
+TEST_CASE("vtu: the bisection state read in its file types (StoredState) restores the same mesh "
+          "and rejects the same values with the same message",
+          "[vtu][state][2d][3d][4d]") {
+  // read_mesh(path, stored) keeps a binary .vtu's bisect:state, marking,
+  // generation, parent_a, parent_b and level out of the mesh's DataArrays,
+  // in their file types; prepare_read_mesh decodes them from there. The
+  // result must be what the DataArray path gives, value for value, and so
+  // must every refusal.
+  TempDir dir;
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  for (const char *name : {"square-tagged.msh", "box-tagged.msh"}) {
+    Mesh m = load_mesh(testing::data_path(name));
+    mark_mesh(m, Marking::Longest);
+    auto r = parse_region(m.dim == 2 ? R"({"type":"sphere","center":[0.3,0.4],"radius":0.3})"
+                                     : R"({"type":"sphere","center":[0.3,0.4,0.5],"radius":0.3})",
+                          m.dim, "t");
+    for (int it = 0; it < 2; ++it)
+      refine(m, select_cells(m, *r));
+    meshes.emplace_back(name, std::move(m));
+  }
+  {
+    Mesh m = generate_kuhn(4, 2);
+    mark_mesh(m, Marking::Index);
+    auto r = parse_region(R"({"type":"sphere","center":[0.3,0.4,0.5,0.6],"radius":0.3})", 4, "t");
+    refine(m, select_cells(m, *r));
+    meshes.emplace_back("4D", std::move(m));
+  }
+  auto read_both = [&](const std::string &path, Mesh &a, Mesh &b, std::string &error_a,
+                       std::string &error_b) {
+    error_a.clear(), error_b.clear();
+    try {
+      a = read_mesh(path);
+      InputFacts facts;
+      prepare_read_mesh(a, path, {}, facts);
+    } catch (const InputError &e) {
+      error_a = e.what();
+    }
+    try {
+      StoredState stored;
+      b = read_mesh(path, stored);
+      for (const DataArray &x : b.cell_data)
+        CHECK(x.name.rfind("bisect:", 0) != 0);
+      for (const DataArray &x : b.point_data)
+        CHECK(x.name.rfind("bisect:", 0) != 0);
+      CHECK(stored.cells.size() == 3);
+      CHECK(stored.points.size() == 3);
+      InputFacts facts;
+      prepare_read_mesh(b, path, {}, facts, &stored);
+      CHECK(stored.empty());
+    } catch (const InputError &e) {
+      error_b = e.what();
+    }
+  };
+  for (auto &[what, mesh] : meshes) {
+    INFO(what);
+    REQUIRE(mesh.has_tree());
+    const std::string path = dir.file("s.vtu");
+    save_mesh(path, mesh);
+    Mesh a, b;
+    std::string error_a, error_b;
+    read_both(path, a, b, error_a, error_b);
+    REQUIRE(error_a.empty());
+    REQUIRE(error_b.empty());
+    CHECK(testing::mesh_difference(a, b).empty());
+    CHECK(a.cells == b.cells);
+    CHECK(a.stage == b.stage);
+    CHECK(a.tag == b.tag);
+    CHECK(a.marking == b.marking);
+    CHECK(a.generation == b.generation);
+    CHECK(a.parent_edge == b.parent_edge);
+    CHECK(a.level == b.level);
+    CHECK(b.cells == mesh.cells);
+    CHECK(b.stage == mesh.stage);
+    CHECK(b.tag == mesh.tag);
+    CHECK(b.generation == mesh.generation);
+    CHECK(b.parent_edge == mesh.parent_edge);
+
+    // Tampered values, written in the arrays' own types.
+    Mesh encoded = mesh;
+    encode_state(encoded);
+    const std::size_t made =
+        std::size_t(std::find_if(encoded.parent_edge.begin(), encoded.parent_edge.end(),
+                                 [](VertexId p) { return p != kNoVertex; }) -
+                    encoded.parent_edge.begin()) /
+        2;
+    REQUIRE(made < encoded.num_vertices());
+    struct Tamper {
+      const char *array;
+      bool cell;
+      std::size_t at;
+      double value;
+    };
+    for (const Tamper &t : {Tamper{kStateArray, true, 5, 8 + 7},     // Maubach tag 7
+                            Tamper{kStateArray, true, 3, -16},       // negative
+                            Tamper{kMarkingArray, true, 7, 2},       // mixed marking
+                            Tamper{kGenerationArray, true, 2, 9000}, // too deep
+                            Tamper{kParentAArray, false, made, double(made)},
+                            Tamper{kLevelArray, false, 0, 3}}) { // an original vertex
+      INFO(t.array << "[" << t.at << "] = " << t.value);
+      Mesh m = encoded;
+      bool found = false;
+      for (DataArray &x : t.cell ? m.cell_data : m.point_data)
+        if (x.name == t.array) {
+          x.values[t.at] = t.value;
+          found = true;
+        }
+      REQUIRE(found);
+      write_mesh(path, m);
+      read_both(path, a, b, error_a, error_b);
+      CHECK(!error_a.empty());
+      CHECK(error_b == error_a);
+      CHECK(error_a.find(t.cell ? "cell " : "vertex ") != std::string::npos);
+    }
+  }
+}
+
+TEST_CASE("vtu: state arrays read in their file types keep the rows of the kept cells and points",
+          "[vtu][state][3d][entities]") {
+  // As in the tagged-entities case above: the lower-dimensional cells come
+  // first and points 0 and 6 are unused, so the kept rows are not a prefix.
+  TempDir dir;
+  AsciiVtu f;
+  f.num_points = 7;
+  f.points = "9 9 9  0 0 0  1 0 0  0 1 0  0 0 1  1 1 1  8 8 8";
+  f.point_data = ascii_array("Int32", kParentAArray, 1, "70 -1 -1 -1 -1 -1 71") +
+                 ascii_array("Int32", kParentBArray, 1, "72 -1 -1 -1 -1 -1 73") +
+                 ascii_array("UInt16", kLevelArray, 1, "9 10 11 12 13 14 60");
+  f.num_cells = 5;
+  f.connectivity = "1  1 2  1 2 3  1 2 3 4  5 4 3 2";
+  f.offsets = "1 3 6 10 14";
+  f.types = "1 3 5 10 10";
+  f.cell_data = ascii_array("Int8", kStateArray, 1, "-5 1 2 3 4") +
+                ascii_array("Int16", kMarkingArray, 1, "9 9 9 0 -1") +
+                ascii_array("UInt16", kGenerationArray, 1, "7 7 7 5 65535") +
+                ascii_array("Float64", "other", 1, "1 2 3 4 5");
+  write_text(dir.file("lower.vtu"), f.text());
+  const Mesh plain = read_mesh(dir.file("lower.vtu"));
+  StoredState stored;
+  const Mesh kept = read_mesh(dir.file("lower.vtu"), stored);
+  REQUIRE(stored.cells.size() == 3);
+  REQUIRE(stored.points.size() == 3);
+  REQUIRE(kept.cell_data.size() == 1); // "other"
+  CHECK(kept.cell_data[0].values == std::vector<double>{4, 5});
+  CHECK(kept.point_data.empty());
+  auto values = [](const StoredArray &a) {
+    std::vector<double> v(a.size());
+    for (std::size_t i = 0; i < v.size(); ++i)
+      v[i] = a[i];
+    return v;
+  };
+  auto plain_values = [](const std::vector<DataArray> &arrays, const std::string &name) {
+    for (const DataArray &a : arrays)
+      if (a.name == name)
+        return a.values;
+    FAIL("no array " << name);
+    return std::vector<double>{};
+  };
+  for (const StoredArray &a : stored.cells) {
+    INFO(a.name);
+    CHECK(values(a) == plain_values(plain.cell_data, a.name));
+  }
+  for (const StoredArray &a : stored.points) {
+    INFO(a.name);
+    CHECK(values(a) == plain_values(plain.point_data, a.name));
+  }
+  CHECK(values(stored.cells[0]) == std::vector<double>{3, 4});
+  CHECK(stored.cells[0].type == ValueType::Int8);
+  CHECK(values(stored.cells[1]) == std::vector<double>{0, -1});
+  CHECK(stored.cells[1].type == ValueType::Int16);
+  CHECK(values(stored.cells[2]) == std::vector<double>{5, 65535});
+  CHECK(values(stored.points[2]) == std::vector<double>{10, 11, 12, 13, 14});
+  CHECK(stored.points[2].type == ValueType::UInt16);
+  CHECK(values(stored.points[0]) == std::vector<double>(5, -1.0));
+}
