@@ -32,12 +32,14 @@ struct InfoArgs {
 
 int run_info(const InfoArgs &a) {
   const std::string &path = a.input;
-  // Validation measures the invariants on its way: not measured again.
+  // Validation measures the invariants and the quality on its way: not
+  // measured again.
   InputFacts facts;
+  facts.want_quality = true;
   Mesh mesh = load_mesh(path, load_progress(path, a.flags.quiet), &facts);
   const bool has_state = mesh.marked();
   const Invariants &inv = facts.invariants;
-  const QualitySummary q = quality_summary(mesh);
+  const QualitySummary &q = facts.quality;
   const Box box = bounding_box(mesh);
   if (a.flags.json) {
     nlohmann::json arrays = nlohmann::json::array();

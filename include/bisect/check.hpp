@@ -138,8 +138,13 @@ using LoadProgress = std::function<void(const char *step, double done)>;
 // mesh again for (the `facts` of prepare_input).
 struct InputFacts {
   bool want_interior = false; // set by the caller: record `interior`
+  bool want_quality = false;  // set by the caller: fill `quality`
   Invariants invariants;      // all of them (the same values as measure_invariants)
   InteriorFacets interior;
+  // quality_summary of the input, from validation's own pass over the cells
+  // (in the stored vertex order: the mean may differ from a later
+  // quality_summary in its last bits).
+  QualitySummary quality;
 };
 void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &progress = {},
                    InputFacts *facts = nullptr);

@@ -3703,7 +3703,9 @@ void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &prog
     std::size_t bad;
     double bad_volume = 0;
     std::vector<std::int8_t> signs;
-    const double volume = cell_pass<D>(mesh, bad, bad_volume, &signs);
+    const double volume =
+        cell_pass<D>(mesh, bad, bad_volume, &signs, nullptr,
+                     facts && facts->want_quality && nc > 0 ? &facts->quality : nullptr);
     if (bad != std::size_t(-1))
       reject(cell_name(mesh, CellId(bad)) + " has zero volume");
     step("matching facets", 0.4);

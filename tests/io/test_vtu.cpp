@@ -899,3 +899,25 @@ TEST_CASE("vtu: state arrays read in their file types keep the rows of the kept 
   CHECK(stored.points[2].type == ValueType::UInt16);
   CHECK(values(stored.points[0]) == std::vector<double>(5, -1.0));
 }
+
+TEST_CASE("io: validation's cell pass gives the input's quality when asked", "[io][quality]") {
+  // refine's first quality row comes from prepare_input's own pass over
+  // the cells (InputFacts::want_quality) instead of one more pass.
+  for (const char *name : {"ball.msh", "square-tagged.msh"}) {
+    INFO(name);
+    const std::string path = testing::data_path(name);
+    Mesh m = read_mesh(path);
+    InputFacts facts;
+    facts.want_quality = true;
+    prepare_read_mesh(m, path, {}, facts);
+    const QualitySummary q = quality_summary(m);
+    REQUIRE(q.max > 0);
+    CHECK(facts.quality.min == Approx(q.min).epsilon(1e-12));
+    CHECK(facts.quality.max == Approx(q.max).epsilon(1e-12));
+    CHECK(facts.quality.mean == Approx(q.mean).epsilon(1e-12));
+    InputFacts without;
+    Mesh again = read_mesh(path);
+    prepare_read_mesh(again, path, {}, without);
+    CHECK(without.quality.max == QualitySummary{}.max); // not computed unless asked
+  }
+}
