@@ -4,7 +4,8 @@
 # from its --json. Prints one JSON object per case and thread count on
 # stdout, with the machine's load.
 #
-#   bash bench/e2e.sh                 # 3D ball 12 iterations, 4D hypercube 25; 1 and all threads
+#   bash bench/e2e.sh                 # 3D ball 12 iterations (then 1 more from its file),
+#                                     # 4D hypercube 25; 1 and all threads
 #   ITER3D=14 ITER4D=25 bash bench/e2e.sh
 #   BIG=1 bash bench/e2e.sh           # also issue 13's case: a 56,635-tet ball, 14 iterations (~3 GB)
 #   SIZES=1 bash bench/e2e.sh         # also issue 13's own input (Gmsh's 49,090-tet ball, made by
@@ -66,6 +67,10 @@ EOF
 }
 
 run_case ball-hemisphere "$root/data/ball.msh" "$root/data/regions/hemisphere.json" "$ITER3D"
+# An adaptive loop's next step: that refined file, with its bisection state,
+# read, validated and refined one iteration more (its read and validate
+# stages are those of a refined file of the size above).
+run_case ball-hemisphere-continued "$OUT/ball-hemisphere.vtu" "$root/data/regions/hemisphere.json" 1
 if [[ $BIG == 1 ]]; then
   "$BISECT" refine "$root/data/ball.msh" --region "$root/data/regions/everything3d.json" -n 2 \
     -o "$OUT/ball-57k.vtu" -f -q --quality-csv none
