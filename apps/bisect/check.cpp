@@ -22,13 +22,16 @@ int run_check(const CheckArgs &a) {
   const LoadProgress progress = load_progress(path, a.flags.quiet);
   if (progress)
     progress("reading", 0.0);
-  Mesh mesh = read_mesh(path);
+  StoredState stored; // a .vtu's bisection state, not checked here: kept small
+  Mesh mesh = read_mesh(path, stored);
+  stored = {};
   InputFacts facts;
   prepare_input(mesh, path, progress, &facts);
   InputFacts original;
   const Invariants *orig = nullptr;
   if (!a.against.empty()) {
-    Mesh o = read_mesh(a.against);
+    Mesh o = read_mesh(a.against, stored);
+    stored = {};
     prepare_input(o, a.against, load_progress(a.against, a.flags.quiet), &original);
     if (o.dim != mesh.dim)
       throw InputError(a.against, "dimension " + std::to_string(o.dim) + " differs from " + path +

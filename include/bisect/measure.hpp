@@ -33,6 +33,16 @@ struct QualitySummary {
 };
 QualitySummary quality_summary(const Mesh &mesh);
 
+// The mean ratio's min, max and mean over the cells (min 1, max 0 and mean
+// 0 without cells) and its histogram of `bins` equal bins over [0, 1] (the
+// last closed; bins >= 1), by all threads, the same for every count: what
+// `bisect quality` prints.
+struct QualityHistogram {
+  QualitySummary summary;
+  std::vector<std::size_t> counts;
+};
+QualityHistogram quality_histogram(const Mesh &mesh, int bins);
+
 // Canonical similarity key: over all vertex permutations, the vector of
 // squared edge lengths divided by their sum, lexicographically smallest,
 // rounded to a relative 1e-6 grid. Two cells are similar iff keys are equal.

@@ -15,6 +15,9 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <vector>
+
+#include <omp.h>
 
 namespace bisect {
 namespace {
@@ -168,6 +171,51 @@ void cell_points(const Mesh &mesh, CellId c, double *out) {
 }
 
 // quality_summary is in check.cpp: the cell pass of the checks computes it.
+
+QualityHistogram quality_histogram(const Mesh &mesh, int bins) {
+  QualityHistogram out;
+  out.summary = {1, 0, 0};
+  out.counts.assign(std::size_t(std::max(bins, 1)), 0);
+  const std::size_t nc = mesh.num_cells(), nb = out.counts.size();
+  if (nc == 0)
+    return out;
+  // Blocks of cells, their sums added in block order; the counts are exact.
+  constexpr std::size_t kBlock = std::size_t(1) << 14;
+  const std::size_t blocks = (nc + kBlock - 1) / kBlock;
+  std::vector<double> lo(blocks), hi(blocks), sum(blocks);
+  const int workers = int(std::clamp<std::size_t>(blocks / 4, 1, std::size_t(threads())));
+  std::vector<std::vector<std::size_t>> counts(std::size_t(workers),
+                                               std::vector<std::size_t>(nb, 0));
+#pragma omp parallel num_threads(workers)
+  {
+    std::vector<std::size_t> &mine = counts[std::size_t(omp_get_thread_num())];
+    double pts[5 * 4];
+#pragma omp for schedule(dynamic, 4)
+    for (std::size_t k = 0; k < blocks; ++k) {
+      double q_lo = 1, q_hi = 0, q_sum = 0;
+      for (std::size_t c = k * kBlock; c < std::min(nc, (k + 1) * kBlock); ++c) {
+        cell_points(mesh, CellId(c), pts);
+        const double q = mean_ratio(pts, mesh.dim);
+        q_lo = std::min(q_lo, q);
+        q_hi = std::max(q_hi, q);
+        q_sum += q;
+        ++mine[std::min(std::size_t(q * double(nb)), nb - 1)];
+      }
+      lo[k] = q_lo, hi[k] = q_hi, sum[k] = q_sum;
+    }
+  }
+  double total = 0;
+  for (std::size_t k = 0; k < blocks; ++k) {
+    out.summary.min = std::min(out.summary.min, lo[k]);
+    out.summary.max = std::max(out.summary.max, hi[k]);
+    total += sum[k];
+  }
+  out.summary.mean = total / double(nc);
+  for (const std::vector<std::size_t> &c : counts)
+    for (std::size_t b = 0; b < nb; ++b)
+      out.counts[b] += c[b];
+  return out;
+}
 
 std::vector<long long> similarity_key(const double *verts, int dim) {
   return dispatch(dim, [&]<int D>() {

@@ -1,6 +1,7 @@
 // Tests for src/measure.cpp: volume, mean ratio, similarity keys.
 #include "bisect/generate.hpp"
 #include "bisect/measure.hpp"
+#include "bisect/threads.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -269,6 +270,47 @@ TEST_CASE("quality summary is the min, max and mean of every cell's mean ratio",
   CHECK(s.min == lo);
   CHECK(s.max == hi);
   CHECK(s.mean == sum / double(nc));
+}
+
+TEST_CASE("quality histogram: every cell's mean ratio counted once, the same on any thread count",
+          "[measure][quality][threads][3d]") {
+  // 3D Kuhn cubes with their inner points moved: ten blocks of cells
+  // (16,384 each, the last partial), enough for up to 2 threads (4 each).
+  Mesh m = generate_kuhn(3, 30);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> jitter(-0.02, 0.02);
+  for (double &x : m.coords)
+    if (x > 0 && x < 1)
+      x += jitter(rng);
+  REQUIRE(m.num_cells() > 9 * 16384);
+  const int bins = 7;
+  std::vector<std::size_t> counts(bins, 0);
+  double lo = 1, hi = 0, sum = 0;
+  double p[16];
+  for (std::size_t c = 0; c < m.num_cells(); ++c) {
+    cell_points(m, CellId(c), p);
+    const double q = mean_ratio(p, 3);
+    lo = std::min(lo, q), hi = std::max(hi, q), sum += q;
+    ++counts[std::min(std::size_t(q * bins), std::size_t(bins - 1))];
+  }
+  QualityHistogram first;
+  for (int t : {1, 2, 3}) {
+    set_threads(t);
+    const QualityHistogram h = quality_histogram(m, bins);
+    INFO(t << " threads");
+    CHECK(h.counts == counts);
+    CHECK(h.summary.min == lo);
+    CHECK(h.summary.max == hi);
+    CHECK(h.summary.mean == Approx(sum / double(m.num_cells())).epsilon(1e-13));
+    if (t == 1)
+      first = h;
+    CHECK(h.summary.mean == first.summary.mean); // to the bit
+  }
+  set_threads(0);
+  const QualityHistogram none = quality_histogram(Mesh{}, 3);
+  CHECK(none.counts == std::vector<std::size_t>(3, 0));
+  CHECK(none.summary.min == 1);
+  CHECK(none.summary.max == 0);
 }
 
 TEST_CASE("quality summary of a Kuhn mesh: every cell has the same mean ratio",
