@@ -125,8 +125,8 @@ literal = kinds.count("literal")
 print(f"3d-zlib.vtu: the same arrays as 3d-none.vtu; {literal} of {blocks} connectivity blocks literal-coded")
 PY
 # A refined file saved again by VTK's writer (what ParaView's "Save Data"
-# does) in ASCII, inline binary, appended raw and LZ4-compressed appended
-# data continues its bisection sequence as our own file does: the state's
+# does) in ASCII, inline binary, appended raw, LZ4-compressed appended and
+# big-endian data continues its bisection sequence as our own file does: the state's
 # arrays come back in the types VTK writes them in (read in their file
 # types, StoredState) and the next iteration's output is the same file.
 for f in 2d-zlib 3d-zlib 4d-zlib tagged-zlib; do
@@ -142,7 +142,7 @@ r = vtk.vtkXMLUnstructuredGridReader()
 r.SetFileName(sys.argv[1])
 r.Update()
 stem = sys.argv[1][:-4]
-for mode in ("ascii", "binary", "raw", "lz4"):
+for mode in ("ascii", "binary", "raw", "lz4", "bigendian"):
     w = vtk.vtkXMLUnstructuredGridWriter()
     w.SetInputData(r.GetOutput())
     w.SetFileName(f"{stem}-vtk-{mode}.vtu")
@@ -155,9 +155,11 @@ for mode in ("ascii", "binary", "raw", "lz4"):
         w.SetEncodeAppendedData(mode != "raw")
         if mode == "lz4":
             w.SetCompressorTypeToLZ4()
+        if mode == "bigendian":
+            w.SetByteOrderToBigEndian()
     assert w.Write() == 1, mode
 PY
-  for mode in ascii binary raw lz4; do
+  for mode in ascii binary raw lz4 bigendian; do
     grep -q 'Name="bisect:state"' $f-vtk-$mode.vtu || fail "$f-vtk-$mode.vtu: VTK dropped bisect:state"
     expect_exit 0 "$BISECT" refine $f-vtk-$mode.vtu --region "$region" -n 1 -o $f-vtk-$mode-next.vtu \
       -q --quality-csv none
