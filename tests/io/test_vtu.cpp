@@ -175,6 +175,23 @@ std::string ascii_array(const std::string &type, const std::string &name, int co
          std::to_string(components) + "\" format=\"ascii\">" + values + "</DataArray>\n";
 }
 
+// data/square-tagged.msh and data/box-tagged.msh, marked with `marking` and
+// refined `iterations` times around a sphere near a corner, by name.
+std::vector<std::pair<std::string, Mesh>> refined_tagged(Marking marking, int iterations) {
+  std::vector<std::pair<std::string, Mesh>> out;
+  for (const char *name : {"square-tagged.msh", "box-tagged.msh"}) {
+    Mesh m = load_mesh(testing::data_path(name));
+    mark_mesh(m, marking);
+    auto r = parse_region(m.dim == 2 ? R"({"type":"sphere","center":[0.3,0.4],"radius":0.3})"
+                                     : R"({"type":"sphere","center":[0.3,0.4,0.5],"radius":0.3})",
+                          m.dim, "t");
+    for (int it = 0; it < iterations; ++it)
+      refine(m, select_cells(m, *r));
+    out.emplace_back(name, std::move(m));
+  }
+  return out;
+}
+
 const std::string kSpatialDimension4 =
     "<DataArray type=\"Int32\" Name=\"SpatialDimension\" NumberOfTuples=\"1\" "
     "format=\"ascii\">4</DataArray>";
@@ -676,13 +693,7 @@ TEST_CASE("vtu: the bisection state made while writing gives the same file as en
   // every compression, and the mesh must come back unchanged.
   TempDir dir;
   std::vector<std::pair<std::string, Mesh>> meshes;
-  for (const char *name : {"square-tagged.msh", "box-tagged.msh"}) {
-    Mesh m = load_mesh(testing::data_path(name));
-    mark_mesh(m, Marking::Index);
-    auto r = parse_region(m.dim == 2 ? R"({"type":"sphere","center":[0.3,0.4],"radius":0.3})"
-                                     : R"({"type":"sphere","center":[0.3,0.4,0.5],"radius":0.3})",
-                          m.dim, "t");
-    refine(m, select_cells(m, *r));
+  for (auto &[name, m] : refined_tagged(Marking::Index, 1)) {
     REQUIRE(!m.entities.empty());
     REQUIRE(m.has_tree());
     meshes.emplace_back(name, m);
@@ -734,17 +745,7 @@ TEST_CASE("vtu: the bisection state read in its file types (StoredState) restore
   // result must be what the DataArray path gives, value for value, and so
   // must every refusal.
   TempDir dir;
-  std::vector<std::pair<std::string, Mesh>> meshes;
-  for (const char *name : {"square-tagged.msh", "box-tagged.msh"}) {
-    Mesh m = load_mesh(testing::data_path(name));
-    mark_mesh(m, Marking::Longest);
-    auto r = parse_region(m.dim == 2 ? R"({"type":"sphere","center":[0.3,0.4],"radius":0.3})"
-                                     : R"({"type":"sphere","center":[0.3,0.4,0.5],"radius":0.3})",
-                          m.dim, "t");
-    for (int it = 0; it < 2; ++it)
-      refine(m, select_cells(m, *r));
-    meshes.emplace_back(name, std::move(m));
-  }
+  std::vector<std::pair<std::string, Mesh>> meshes = refined_tagged(Marking::Longest, 2);
   {
     Mesh m = generate_kuhn(4, 2);
     mark_mesh(m, Marking::Index);
