@@ -244,6 +244,12 @@ bool decode_state(Mesh &mesh, const std::string &path,
       (tag && tag->components != 1) || (packed && packed->components() != 1) ||
       marking.components() != 1)
     throw InputError(path, "bisection state arrays have the wrong number of components");
+  // (Files give one tuple per cell; arrays made in memory, or a
+  // StoredState filled by hand, might not.)
+  if ((order && order->values.size() != nc * std::size_t(nv)) ||
+      (stage && stage->values.size() != nc) || (tag && tag->values.size() != nc) ||
+      (packed && packed->size() != nc) || marking.size() != nc)
+    throw InputError(path, "bisection state arrays do not have one tuple per cell");
   double m0 = nc ? marking[0] : 0;
   if (!(m0 == 0 || m0 == 1 || m0 == 2 || m0 == 3))
     throw InputError(path, std::string(kMarkingArray) + " must be 0, 1, 2 or 3");

@@ -321,3 +321,34 @@ TEST_CASE("state: the check on several threads names the first inconsistent face
     testing::set_walk_chunk_bytes(0);
   }
 }
+
+TEST_CASE("state: arrays without one value per cell are rejected, wherever they are",
+          "[state][io]") {
+  Mesh base = refined(3, Marking::Index, 1, 5);
+  encode_state(base);
+  {
+    Mesh m = base;
+    array_named(m, kStateArray).values.pop_back();
+    prepare_input(m, "in.vtu");
+    REQUIRE_THROWS_WITH(decode_state(m, "in.vtu"),
+                        Catch::StartsWith("in.vtu: bisection state arrays do not have one tuple"));
+  }
+  {
+    // The same arrays in a StoredState, bisect:marking one value short.
+    Mesh m = base;
+    StoredState stored;
+    for (const char *name : {kStateArray, kMarkingArray}) {
+      const DataArray &a = array_named(m, name);
+      std::vector<std::int16_t> v(a.values.begin(), a.values.end());
+      if (name == std::string(kMarkingArray))
+        v.pop_back();
+      stored.cells.push_back({name, 1, ValueType::Int16, std::move(v)});
+    }
+    std::erase_if(m.cell_data, [](const DataArray &a) {
+      return a.name == kStateArray || a.name == kMarkingArray;
+    });
+    prepare_input(m, "in.vtu");
+    REQUIRE_THROWS_WITH(decode_state(m, "in.vtu", nullptr, &stored),
+                        Catch::StartsWith("in.vtu: bisection state arrays do not have one tuple"));
+  }
+}
