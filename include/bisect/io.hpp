@@ -20,7 +20,7 @@ namespace bisect {
 // point data become DataArrays; Gmsh tags become cell arrays
 // "gmsh:physical" and "gmsh:geometrical". Throws InputError naming the file.
 Mesh read_mesh(const std::string &path);
-// The same, except that a binary .vtu's bisection state arrays go into
+// The same, except that a one-piece .vtu's bisection state arrays go into
 // `stored` in their file types (StoredState in state.hpp), not into the
 // mesh's DataArrays: for prepare_read_mesh, in less memory. Other files
 // leave `stored` empty.

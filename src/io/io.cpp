@@ -28,17 +28,23 @@ namespace fs = std::filesystem;
 
 enum class Format { Vtu, Msh };
 
+// The extension of `path` in lower case (".vtu", ".msh", ...).
+std::string lower_extension(const std::string &path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  return ext;
+}
+
 // The format named by the (case-insensitive) extension of `path`.
 Format format_of(const std::string &path) {
-  std::string ext = fs::path(path).extension().string();
-  std::string lower = ext;
-  std::transform(lower.begin(), lower.end(), lower.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
+  const std::string lower = lower_extension(path);
   if (lower == ".vtu")
     return Format::Vtu;
   if (lower == ".msh")
     return Format::Msh;
-  throw InputError(path, "unknown mesh format '" + ext + "' (expected .vtu or .msh)");
+  throw InputError(path, "unknown mesh format '" + fs::path(path).extension().string() +
+                             "' (expected .vtu or .msh)");
 }
 
 // Fails with a clear reason unless `path` is a readable, non-empty file.
@@ -183,10 +189,7 @@ Mesh read_mesh(const std::string &path) {
   if (path == "-")
     return read_stdin();
   check_readable_file(path);
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
-  if (ext == ".pvtu") {
+  if (lower_extension(path) == ".pvtu") {
     Mesh mesh = read_pvtu(path);
     settle_plane(mesh, path, Format::Vtu);
     return mesh;
@@ -199,10 +202,7 @@ Mesh read_mesh(const std::string &path) {
 
 Mesh read_mesh(const std::string &path, StoredState &stored) {
   stored = {};
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
-  if (path == "-" || ext != ".vtu")
+  if (path == "-" || lower_extension(path) != ".vtu")
     return read_mesh(path);
   check_readable_file(path);
   Mesh mesh = read_vtu(path, stored);

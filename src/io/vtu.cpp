@@ -210,11 +210,23 @@ ValueType value_type_named(const std::string &t) {
   return ValueType::Unknown;
 }
 
+// Keeps the tuples (of k values) of `v` at `rows` (increasing), moved to the
+// front in place (rows[i] >= i, so no tuple is overwritten before it is
+// read): a copy would touch as much fresh memory again, and a page fault
+// per page of it is a large part of reading.
+template <class T, class Row>
+void keep_rows(std::vector<T> &v, std::size_t k, const std::vector<Row> &rows) {
+  T *to = v.data();
+  if (rows.size() * k != v.size())
+    for (Row r : rows)
+      for (std::size_t j = 0; j < k; ++j)
+        *to++ = v[std::size_t(r) * k + j];
+  v.resize(rows.size() * k);
+}
+
 // The selected tuples (file ids in `rows`, increasing) of `a`. With
-// `in_place` they are moved to the front of a's values, which become the
-// result (rows[i] >= i, so no tuple is overwritten before it is read): a
-// copy would touch as much fresh memory again, and a page fault per page of
-// it is a large part of reading. Otherwise copied, `a` left as it is.
+// `in_place` a's values become the result (keep_rows). Otherwise copied,
+// `a` left as it is.
 template <class Row>
 DataArray take_rows(vtu::Array &a, const std::string &name, const std::vector<Row> &rows,
                     bool in_place) {
@@ -224,12 +236,7 @@ DataArray take_rows(vtu::Array &a, const std::string &name, const std::vector<Ro
   out.type = value_type_named(a.type);
   const std::size_t k = std::size_t(a.components);
   if (in_place) {
-    double *to = a.values.data();
-    if (rows.size() * k != a.values.size())
-      for (Row r : rows)
-        for (std::size_t j = 0; j < k; ++j)
-          *to++ = a.values[std::size_t(r) * k + j];
-    a.values.resize(rows.size() * k);
+    keep_rows(a.values, k, rows);
     out.values = std::move(a.values);
     return out;
   }
@@ -248,17 +255,7 @@ StoredArray take_stored_rows(vtu::Array &a, const std::string &name, const std::
   out.name = name;
   out.components = a.components;
   out.type = value_type_named(a.type);
-  std::visit(
-      [&](auto &v) {
-        const std::size_t k = std::size_t(a.components);
-        auto *to = v.data();
-        if (rows.size() * k != v.size())
-          for (Row r : rows)
-            for (std::size_t j = 0; j < k; ++j)
-              *to++ = v[std::size_t(r) * k + j];
-        v.resize(rows.size() * k);
-      },
-      a.ints);
+  std::visit([&](auto &v) { keep_rows(v, std::size_t(a.components), rows); }, a.ints);
   out.values = std::move(a.ints);
   return out;
 }

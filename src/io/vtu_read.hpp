@@ -46,8 +46,8 @@ struct Grid {
 
 // Reads `path`; throws InputError(path, one line) on anything it cannot
 // read exactly.
-// With `keep_state_types`, the binary arrays a StoredState holds (by name;
-// Int8, UInt8, Int16, UInt16 or Int32) are read as Array::ints.
+// With `keep_state_types`, the arrays a StoredState holds (by name; Int8,
+// UInt8, Int16, UInt16 or Int32; one piece only) are read as Array::ints.
 Grid read_grid(const std::string &path, bool keep_state_types = false);
 
 // Same, from bytes already in memory (`path` only names them in errors).
