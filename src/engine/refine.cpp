@@ -133,10 +133,17 @@ public:
   // cache, answers for most of them without a probe of the table (3D ball,
   // 12 iterations, 8.8 M candidate cells, one thread, refine() timed in an
   // in-process harness: 1.65-1.85 s without it, 1.33-1.58 s with it, runs
-  // alternated on a noisy machine).
+  // alternated on a noisy machine). At most 4 MB (kFilterBits): a larger
+  // one, read at random while the closure's scan streams the cells through
+  // the cache, missed it more often than the false positives of a smaller
+  // one cost (Gmsh's 49,090-tet ball, 14 iterations, one thread, whose
+  // last iterations of 10.8 and 18.3 M tets had 8 and 16 MB: refinement
+  // 12.1-12.9 s against 11.0-12.0 with 4 MB in three runs alternated;
+  // 2 MB or 1 MB were not better).
+  static constexpr std::size_t kFilterBits = std::size_t(1) << 25;
   void expect(std::size_t n) {
     std::size_t bits = std::size_t(1) << 16;
-    while (bits < 4 * n)
+    while (bits < 4 * n && bits < kFilterBits)
       bits *= 2;
     filter_.assign(bits / 64, 0);
     filter_mask_ = bits - 1;
