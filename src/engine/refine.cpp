@@ -150,8 +150,8 @@ public:
   }
   // Room for `keys` keys before the first insert, so that the serial
   // kernel's insert() does not grow the table from 1024 slots by doubling
-  // (each step a fresh table and a rehash: 3D ball, 14 iterations, 1.1 GB
-  // allocated for tables whose largest was 134 MB).
+  // (each step a fresh table and a rehash: Gmsh's 3D ball, 14 iterations,
+  // one thread, about 0.5 GB asked for in tables whose largest was 134 MB).
   void presize(std::size_t keys) {
     std::size_t want = 1024;
     while ((keys + 1) * 2 > want)
@@ -318,9 +318,10 @@ private:
   std::size_t filter_bit(std::uint64_t k) const {
     return std::size_t((k * 0xC2B2AE3D27D4EB4Full) >> 24) & filter_mask_;
   }
-  // Twice the slots (at least `at_least`), filled and rehashed by all threads when it is large
-  // (the tables of the last iterations are; filling and rehashing them on
-  // one thread was a tenth of the refinement on two). The keys are distinct,
+  // Twice the slots or more (at least `at_least`), filled and rehashed by
+  // all threads when it is large (the tables of the last iterations are;
+  // filling and rehashing them on one thread was a tenth of the refinement
+  // on two). The keys are distinct,
   // so where each lands does not depend on the threads, and the filter
   // already holds them.
   void grow(std::size_t at_least = 0) {
