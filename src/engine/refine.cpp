@@ -153,11 +153,8 @@ public:
   // (each step a fresh table and a rehash: Gmsh's 3D ball, 14 iterations,
   // one thread, about 0.5 GB asked for in tables whose largest was 134 MB).
   void presize(std::size_t keys) {
-    std::size_t want = 1024;
-    while ((keys + 1) * 2 > want)
-      want *= 2;
-    if (size_ == 0 && want > capacity_)
-      grow(want);
+    if (size_ == 0 && 2 * (keys + 1) > capacity_)
+      grow(2 * (keys + 1));
   }
   VertexId find(std::uint64_t k) const {
     if (size_ == 0)
@@ -208,11 +205,8 @@ public:
   void begin_round(std::size_t more) {
     const int room = testing::midpoint_room();
     more = room > 0 ? more / std::size_t(room) : more / 2;
-    std::size_t want = std::max<std::size_t>(1024, capacity_);
-    while (10 * (keys_ + more) > 6 * want)
-      want *= 2;
-    if (capacity_ == 0 || want > capacity_)
-      grow(want);
+    if (capacity_ == 0 || 10 * (keys_ + more) > 6 * capacity_)
+      grow((10 * (keys_ + more) + 5) / 6);
     limit_ = capacity_ / 4 * 3;
     overflow_ = false;
   }
@@ -318,12 +312,12 @@ private:
   std::size_t filter_bit(std::uint64_t k) const {
     return std::size_t((k * 0xC2B2AE3D27D4EB4Full) >> 24) & filter_mask_;
   }
-  // Twice the slots or more (at least `at_least`), filled and rehashed by
-  // all threads when it is large (the tables of the last iterations are;
-  // filling and rehashing them on one thread was a tenth of the refinement
-  // on two). The keys are distinct,
-  // so where each lands does not depend on the threads, and the filter
-  // already holds them.
+  // Twice the slots, or the next power of two from there that holds
+  // `at_least`, filled and rehashed by all threads when it is large (the
+  // tables of the last iterations are; filling and rehashing them on one
+  // thread was a tenth of the refinement on two). The keys are distinct, so
+  // where each lands does not depend on the threads, and the filter already
+  // holds them.
   void grow(std::size_t at_least = 0) {
     std::unique_ptr<Slot[]> old = std::move(slots_);
     const std::size_t old_capacity = capacity_;
