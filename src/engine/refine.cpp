@@ -234,12 +234,16 @@ public:
   }
   // A slot claimed in this round has no value yet; `who` (an index into the
   // round's work) bids to be its first claimant, the smallest index wins.
+  // Returns whether `who` was the smallest bidder when it bid: false means
+  // it has lost; true, that it may win, unless a smaller index bids later.
   bool fresh(std::uint32_t s) const { return slots_[s].value == kNoVertex; }
-  void bid(std::uint32_t s, std::uint32_t who) {
+  bool bid(std::uint32_t s, std::uint32_t who) {
     std::atomic_ref<std::uint32_t> f(slots_[s].first);
     std::uint32_t seen = f.load(std::memory_order_relaxed);
-    while (who < seen && !f.compare_exchange_weak(seen, who, std::memory_order_relaxed)) {
-    }
+    while (who < seen)
+      if (f.compare_exchange_weak(seen, who, std::memory_order_relaxed))
+        return true;
+    return seen == who;
   }
   std::uint32_t first_bidder(std::uint32_t s) const { return slots_[s].first; }
   // Asks for slot s ahead of fresh(), first_bidder(), settle() or value().
@@ -1135,9 +1139,10 @@ private:
         defect[b] = {i, d};
     };
     // Per cell: kWon (its edge's midpoint is new and it is the first in
-    // work order to bisect that edge) and kSplits (its edge may split an
-    // entity, EntitySplitter::may_split).
-    constexpr std::uint8_t kWon = 1, kSplits = 2;
+    // work order to bisect that edge), kSplits (its edge may split an
+    // entity, EntitySplitter::may_split) and kMayWin (its bid was the
+    // smallest when it bid: only these can have won).
+    constexpr std::uint8_t kWon = 1, kSplits = 2, kMayWin = 4;
     std::vector<std::uint8_t> flags(w);
     mids_.begin_round(w);
     for (;;) {
@@ -1170,9 +1175,9 @@ private:
             if (s == MidpointMap::kNoSlot)
               continue; // the round overflowed: claimed again below
             slot[i] = s;
-            if (mids_.fresh(s))
-              mids_.bid(s, std::uint32_t(i));
-            flags[i] = splitter_ && splitter_->may_split(a, z) ? kSplits : 0;
+            const bool may_win = mids_.fresh(s) && mids_.bid(s, std::uint32_t(i));
+            flags[i] = std::uint8_t((splitter_ && splitter_->may_split(a, z) ? kSplits : 0) |
+                                    (may_win ? kMayWin : 0));
           }
         }
       }
@@ -1181,13 +1186,18 @@ private:
       mids_.retry_round(w);
     }
     // 2. The winners (a bit in flags: settle() below forgets the bids) and
-    // their ids, which depend on the blocks' order only.
+    // their ids, which depend on the blocks' order only. Only a cell whose
+    // bid was the smallest when it bid reads its slot again, at random: a
+    // few more than the winners (Gmsh's 3D ball, 14 iterations, two
+    // threads: 5.65 M of 30.9 M cells for 5.56 M winners; every cell read
+    // its slot here before, and the kernel took 3.22-3.86 s against
+    // 3.14-3.31 now, three runs each alternated).
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
     for (std::size_t b = 0; b < blocks; ++b)
       for (std::size_t i = b * kBlock; i < std::min(w, (b + 1) * kBlock); ++i) {
-        if (i + kSlotAhead < w)
+        if (i + kSlotAhead < w && flags[i + kSlotAhead] & kMayWin)
           mids_.prefetch_slot(slot[i + kSlotAhead]);
-        const bool won = mids_.fresh(slot[i]) && mids_.first_bidder(slot[i]) == std::uint32_t(i);
+        const bool won = flags[i] & kMayWin && mids_.first_bidder(slot[i]) == std::uint32_t(i);
         flags[i] |= won ? kWon : 0;
         winners[b + 1] += won;
       }
