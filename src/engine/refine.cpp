@@ -558,10 +558,17 @@ public:
       limits_.origin->clear();
     // Closure bisects cells about as coarse as the selected ones or coarser;
     // when a selected cell's edge is near the precision limit, keep the undo
-    // log so that passing it anywhere undoes the iteration.
-    for (CellId c : work)
-      if (!logging_ && resolution(refinement_edge(c)) < 1024)
-        logging_ = true;
+    // log so that passing it anywhere undoes the iteration. (On all threads:
+    // each cell's edge ends are read at random.)
+    if (!logging_) {
+      int near = 0;
+      const std::size_t n = work.size();
+      const int workers = n >= kParallelPass ? threads() : 1;
+#pragma omp parallel for num_threads(workers) schedule(static) reduction(max : near)
+      for (std::size_t i = 0; i < n; ++i)
+        near = std::max(near, int(resolution(refinement_edge(work[i])) < 1024));
+      logging_ = near != 0;
+    }
     if (logging_ && splitter_)
       entities0_ = m_.entities; // what undo() puts back
     if (logging_)
