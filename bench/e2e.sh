@@ -13,9 +13,15 @@
 #                                     # iterations (10.8, 18.3, 31.1 and 52.1 M tets; 2.5 GB at 15):
 #                                     # seconds per million generated cells by size
 #   THREADS="1 2" BISECT=build/bisect OUT=/tmp/bench bash bench/e2e.sh
+#   REPEAT=3 SIZES=1 SIZE_ITERATIONS=14 bash bench/e2e.sh
+#                                     # each case 3 times, the thread counts alternated;
+#                                     # the run of median time is printed, with all the
+#                                     # times ("seconds_all")
 #
 # Figures: generated cells per second (cells made / whole run), seconds per
-# million generated cells, and peak resident bytes per final cell. A
+# million generated cells, and peak resident bytes per final cell; for a
+# thread count other than 1, "speedup_over_1_thread" (one thread's median
+# time over this one's) when 1 ran first. A
 # baseline to compare with is kept in bench/baseline-e2e.jsonl (BIG=1, made
 # 2026-12-02 16:35 UTC on a 2-core machine, load about 1.6 from the
 # benchmark itself; bash bench/e2e.sh > new.jsonl, then /usr/bin/python3
@@ -33,6 +39,7 @@ THREADS=${THREADS:-"1 $(nproc)"}
 BIG=${BIG:-0}
 SIZES=${SIZES:-0}
 SIZE_ITERATIONS=${SIZE_ITERATIONS:-"12 13 14 15"}
+REPEAT=${REPEAT:-1}
 mkdir -p "$OUT"
 load=$(cut -d' ' -f1-3 /proc/loadavg)
 cpus=$(nproc)
@@ -40,30 +47,54 @@ cpus=$(nproc)
 run_case() { # name input region iterations extra...
   local name=$1 input=$2 region=$3 n=$4
   shift 4
-  local json threads
-  for threads in $THREADS; do
-    load=$(cut -d' ' -f1-3 /proc/loadavg)
-    json=$("$BISECT" refine "$input" --region "$region" -n "$n" -o "$OUT/$name.vtu" -f -q --json \
-      --threads "$threads" "$@")
-    /usr/bin/python3 - "$name" "$load" "$cpus" "$json" "$threads" <<'EOF'
-import json, sys
-name, load, cpus, j = sys.argv[1], sys.argv[2], int(sys.argv[3]), json.loads(sys.argv[4])
-threads = int(sys.argv[5])
-made = j["cells"] - j["initial_cells"]
-out = {
-    "case": f"{name}-t{threads}", "threads": threads, "dim": j["dim"],
-    "iterations": j["iterations"],
-    "initial_cells": j["initial_cells"], "cells": j["cells"],
-    "seconds": round(j["seconds"], 3),
-    "stages": {k: round(v, 3) for k, v in j["stages"].items()},
-    "generated_cells_per_second": round(made / j["seconds"]),
-    "seconds_per_million_generated": round(j["seconds"] / made * 1e6, 3),
-    "peak_bytes_per_cell": round(j["peak_rss_bytes"] / j["cells"], 1),
-    "load_before": load, "cpus": cpus,
-}
-print(json.dumps(out))
-EOF
+  local runs threads r
+  runs=$(mktemp)
+  # REPEAT rounds, each running every thread count once, so that a drift of
+  # the machine's speed falls on all of them alike.
+  for ((r = 1; r <= REPEAT; r++)); do
+    for threads in $THREADS; do
+      load=$(cut -d' ' -f1-3 /proc/loadavg)
+      "$BISECT" refine "$input" --region "$region" -n "$n" -o "$OUT/$name.vtu" -f -q --json \
+        --threads "$threads" "$@" |
+        /usr/bin/python3 -c 'import json, sys; j = json.load(sys.stdin); j["threads"] = int(sys.argv[1]); j["load_before"] = sys.argv[2]; print(json.dumps(j))' \
+          "$threads" "$load" >>"$runs"
+    done
   done
+  /usr/bin/python3 - "$name" "$cpus" "$runs" <<'EOF'
+import json, sys
+name, cpus = sys.argv[1], int(sys.argv[2])
+runs = [json.loads(line) for line in open(sys.argv[3])]
+by_threads = {}
+for j in runs:
+    by_threads.setdefault(j["threads"], []).append(j)
+medians = {}
+for threads, js in by_threads.items():
+    # The run of median time (of an even count, the faster middle one)
+    # stands for its thread count, with its stages and peak; with several
+    # runs, all their times are given beside it.
+    js.sort(key=lambda j: j["seconds"])
+    j = js[(len(js) - 1) // 2]
+    medians[threads] = j["seconds"]
+    made = j["cells"] - j["initial_cells"]
+    out = {
+        "case": f"{name}-t{threads}", "threads": threads, "dim": j["dim"],
+        "iterations": j["iterations"],
+        "initial_cells": j["initial_cells"], "cells": j["cells"],
+        "seconds": round(j["seconds"], 3),
+        "stages": {k: round(v, 3) for k, v in j["stages"].items()},
+        "generated_cells_per_second": round(made / j["seconds"]),
+        "seconds_per_million_generated": round(j["seconds"] / made * 1e6, 3),
+        "peak_bytes_per_cell": round(j["peak_rss_bytes"] / j["cells"], 1),
+        "load_before": j["load_before"], "cpus": cpus,
+    }
+    if len(js) > 1:
+        out["runs"] = len(js)
+        out["seconds_all"] = [round(x["seconds"], 3) for x in js]
+    if threads != 1 and 1 in medians:
+        out["speedup_over_1_thread"] = round(medians[1] / j["seconds"], 3)
+    print(json.dumps(out))
+EOF
+  rm -f "$runs"
 }
 
 run_case ball-hemisphere "$root/data/ball.msh" "$root/data/regions/hemisphere.json" "$ITER3D"
