@@ -47,8 +47,8 @@ cpus=$(nproc)
 run_case() { # name input region iterations extra...
   local name=$1 input=$2 region=$3 n=$4
   shift 4
-  local runs threads r
-  runs=$(mktemp)
+  local runs="$OUT/.$name.runs.jsonl" threads r
+  rm -f "$runs"
   # REPEAT rounds, each running every thread count once, so that a drift of
   # the machine's speed falls on all of them alike.
   for ((r = 1; r <= REPEAT; r++)); do
