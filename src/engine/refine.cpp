@@ -818,24 +818,40 @@ private:
     out.clear();
     seen.resize(std::max(seen.size(), (cells_before + 63) / 64), 0);
     const VertexId *cells = m_.cells.data();
-    for (std::size_t v = verts_before; v < m_.num_vertices(); ++v) {
-      const VertexId a = m_.parent_edge[2 * v], b = m_.parent_edge[2 * v + 1];
-      around_.for_each(fewer_around(a, b), [&](CellId d) {
-        const std::uint64_t bit = std::uint64_t(1) << (d & 63);
-        if (d >= cells_before || ((bisected[d >> 6] | seen[d >> 6]) & bit))
-          return;
-        const VertexId *x = cells + std::size_t(d) * N;
-        bool has_a = false, has_b = false;
-        for (int i = 0; i < N; ++i) {
-          has_a |= x[i] == a;
-          has_b |= x[i] == b;
-        }
-        if (has_a && has_b) {
-          seen[d >> 6] |= bit;
-          out.push_back(d);
-        }
-      });
+    // The edges on all threads, a share each. A cell around two edges is
+    // kept by the thread that sets its bit in `seen` first: which cells are
+    // found does not depend on the threads, and they are sorted below.
+    // (Gmsh's 3D ball, 14 iterations, two threads, three runs each
+    // alternated: the walks took 0.31-0.46 s on one thread, 0.24-0.26 s.)
+    const std::size_t v0 = verts_before, v1 = m_.num_vertices();
+    const int workers = v1 - v0 >= kParallelWalk ? threads() : 1;
+    std::vector<std::vector<CellId>> part(static_cast<std::size_t>(workers));
+#pragma omp parallel num_threads(workers)
+    {
+      std::vector<CellId> &mine = part[std::size_t(omp_get_thread_num())];
+#pragma omp for schedule(dynamic, 64)
+      for (std::size_t v = v0; v < v1; ++v) {
+        const VertexId a = m_.parent_edge[2 * v], b = m_.parent_edge[2 * v + 1];
+        around_.for_each(fewer_around(a, b), [&](CellId d) {
+          const std::uint64_t bit = std::uint64_t(1) << (d & 63);
+          if (d >= cells_before || (bisected[d >> 6] & bit))
+            return;
+          std::atomic_ref<std::uint64_t> word(seen[d >> 6]);
+          if (word.load(std::memory_order_relaxed) & bit)
+            return;
+          const VertexId *x = cells + std::size_t(d) * N;
+          bool has_a = false, has_b = false;
+          for (int i = 0; i < N; ++i) {
+            has_a |= x[i] == a;
+            has_b |= x[i] == b;
+          }
+          if (has_a && has_b && !(word.fetch_or(bit, std::memory_order_relaxed) & bit))
+            mine.push_back(d);
+        });
+      }
     }
+    for (const std::vector<CellId> &p : part)
+      out.insert(out.end(), p.begin(), p.end());
     for (CellId c : out)
       seen[c >> 6] = 0;
     Hanging test(*this, out);
@@ -1100,6 +1116,9 @@ private:
     return threads() > 1 && count >= kParallelPass;
   }
   static constexpr std::size_t kParallelPass = std::size_t(1) << 13;
+  // walk_around() runs on all threads from this many new vertices (each
+  // one's walk reads about a hundred cells).
+  static constexpr std::size_t kParallelWalk = 256;
   // Around is built for a 3D input of this many cells or more; otherwise
   // every pass scans. Building costs ~33 ns an input tet on one thread; the
   // passes that walk instead of scanning saved 20-32 ns an input tet in
