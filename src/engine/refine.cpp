@@ -411,12 +411,17 @@ public:
     std::uint32_t *start = start_.data();
     CellId *around = around_.get();
     std::uint16_t *place = low.get();
+    // No descendants yet: filled by all threads, which a vector's assign()
+    // did on one, in fresh pages.
+    first_ = std::make_unique_for_overwrite<CellId[]>(nc0);
+    CellId *first = first_.get();
 #pragma omp parallel num_threads(w)
     {
       const std::size_t t = std::size_t(omp_get_thread_num()),
                         n = std::size_t(omp_get_num_threads());
       std::size_t *mine = at.data() + t * nb;
       const std::size_t c0 = nc0 * t / n, c1 = nc0 * (t + 1) / n;
+      std::fill(first + c0, first + c1, kNoCell);
       for (std::size_t s = c0 * N; s < c1 * N; ++s)
         ++mine[cells[s] >> shift];
 #pragma omp barrier
@@ -467,7 +472,6 @@ public:
       }
     }
     start[nv0] = std::uint32_t(slots);
-    first_.assign(nc0, kNoCell);
     next_.clear();
     nc0_ = nc0;
   }
@@ -502,8 +506,8 @@ private:
   static constexpr int kBuildWorkers = 8;
   static constexpr std::size_t kBuckets = 1024;
   std::unique_ptr<CellId[]> around_;
-  std::vector<CellId> first_; // per input cell: its newest appended descendant
-  std::vector<CellId> next_;  // per appended cell: the next older one of its input cell
+  std::unique_ptr<CellId[]> first_; // per input cell: its newest appended descendant
+  std::vector<CellId> next_;        // per appended cell: the next older one of its input cell
   std::size_t nc0_ = 0;
 };
 
