@@ -120,12 +120,21 @@ static void state_sources(const Mesh &mesh, const std::vector<std::uint8_t> &fli
   // the information, not the bytes.)
   const ValueType type =
       16 * swapped_rank + 8 + mesh.dim <= 127 ? ValueType::Int8 : ValueType::Int16;
-  cells.push_back({kStateArray, 1, type, [=](std::size_t c) {
+  cells.push_back({kStateArray, 1, type,
+                   [=](std::size_t c) {
                      return double(
                          pack_state((*flips)[c] ? swapped_rank : 0, m->stage[c], m->tag[c]));
+                   },
+                   [=](std::size_t first, std::size_t n, double *out) {
+                     const std::uint8_t *flip = flips->data() + first;
+                     const Stage *stage = m->stage.data() + first;
+                     const std::uint8_t *tag = m->tag.data() + first;
+                     for (std::size_t i = 0; i < n; ++i)
+                       out[i] = double(pack_state(flip[i] ? swapped_rank : 0, stage[i], tag[i]));
                    }});
   const double marking = double(int(mesh.marking));
-  cells.push_back({kMarkingArray, 1, ValueType::Int8, [=](std::size_t) { return marking; }});
+  cells.push_back({kMarkingArray, 1, ValueType::Int8, [=](std::size_t) { return marking; },
+                   [=](std::size_t, std::size_t n, double *out) { std::fill_n(out, n, marking); }});
 }
 
 void encode_state(Mesh &mesh) {

@@ -21,6 +21,9 @@ struct ArraySource {
   int components = 1;
   ValueType type = ValueType::Int32;
   std::function<double(std::size_t)> value;
+  // When set, value(first) .. value(first + n - 1) into out at once (the
+  // writer's form: one call per piece of a block, not per value).
+  std::function<void(std::size_t first, std::size_t n, double *out)> fill = {};
 };
 
 struct StateArrays {

@@ -61,18 +61,31 @@ void tree_sources(const Mesh &mesh, std::vector<ArraySource> &cells,
                   std::vector<ArraySource> &points) {
   const Mesh *m = &mesh;
   cells.push_back({kGenerationArray, 1, ValueType::UInt16,
-                   [=](std::size_t c) { return double(m->generation[c]); }});
+                   [=](std::size_t c) { return double(m->generation[c]); },
+                   [=](std::size_t first, std::size_t n, double *out) {
+                     std::copy_n(m->generation.data() + first, n, out);
+                   }});
   auto parent = [=](int end) {
     return [=](std::size_t v) {
       const VertexId p = m->parent_edge[2 * v + std::size_t(end)];
       return p == kNoVertex ? -1.0 : double(p);
     };
   };
-  points.push_back({kParentAArray, 1, ValueType::Int32, parent(0)});
-  points.push_back({kParentBArray, 1, ValueType::Int32, parent(1)});
+  auto parents = [=](int end) {
+    return [=](std::size_t first, std::size_t n, double *out) {
+      const VertexId *p = m->parent_edge.data() + 2 * first + std::size_t(end);
+      for (std::size_t i = 0; i < n; ++i)
+        out[i] = p[2 * i] == kNoVertex ? -1.0 : double(p[2 * i]);
+    };
+  };
+  points.push_back({kParentAArray, 1, ValueType::Int32, parent(0), parents(0)});
+  points.push_back({kParentBArray, 1, ValueType::Int32, parent(1), parents(1)});
   if (mesh.level.size() == mesh.num_vertices())
-    points.push_back(
-        {kLevelArray, 1, ValueType::UInt16, [=](std::size_t v) { return double(m->level[v]); }});
+    points.push_back({kLevelArray, 1, ValueType::UInt16,
+                      [=](std::size_t v) { return double(m->level[v]); },
+                      [=](std::size_t first, std::size_t n, double *out) {
+                        std::copy_n(m->level.data() + first, n, out);
+                      }});
 }
 
 DataArray materialize(const ArraySource &source, std::size_t rows) {
