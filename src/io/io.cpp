@@ -79,7 +79,7 @@ void write_as(Format format, const std::string &path, const Mesh &mesh, const Wr
   if (format == Format::Vtu)
     write_vtu_with_state(path, mesh, options.compression, state);
   else
-    write_msh(path, mesh);
+    write_msh_with_state(path, mesh, state);
 }
 
 } // namespace
@@ -247,7 +247,7 @@ void write_mesh_file_with_state(const std::string &file, const std::string &name
     write_mesh_file(file, name, mesh, options);
     return;
   }
-  if (format_named(name, options.format) != Format::Vtu || !can_stream_state(mesh)) {
+  if (!can_stream_state(mesh)) {
     encode_state(mesh);
     try {
       write_mesh_file(file, name, mesh, options);

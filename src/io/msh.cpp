@@ -35,6 +35,7 @@
 #include "bisect/output.hpp"
 #include "io/file_bytes.hpp"
 #include "io/msh_testing.hpp"
+#include "io/state_arrays.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -1455,6 +1456,11 @@ Mesh assemble(Source &src, MshFile &f) {
 // ---------------------------------------------------------------------------
 // Writing (MSH 4.1 binary)
 
+// v's bytes at `at`.
+template <class T> void store(char *at, T v) {
+  std::memcpy(at, &v, sizeof(T));
+}
+
 // A buffered binary output file; errors become InputError naming the file.
 class Output {
 public:
@@ -1470,17 +1476,29 @@ public:
   Output &operator=(const Output &) = delete;
 
   void text(std::string_view s) {
-    buffer_.append(s);
-    flush_if_full();
+    if (s.size() > kBuffer - used_) {
+      flush();
+      if (s.size() > kBuffer) {
+        put(s.data(), s.size());
+        return;
+      }
+    }
+    std::memcpy(buffer_.get() + used_, s.data(), s.size());
+    used_ += s.size();
   }
-  template <class T> void raw(T v) {
-    char b[sizeof(T)];
-    std::memcpy(b, &v, sizeof(T));
-    buffer_.append(b, sizeof(T));
-    flush_if_full();
-  }
+  template <class T> void raw(T v) { std::memcpy(span(sizeof(T)), &v, sizeof(T)); }
   void size(std::uint64_t v) { raw<std::uint64_t>(v); }
   void int32(long long v) { raw<std::int32_t>(std::int32_t(v)); }
+  // Room for the next n bytes (n at most kSpan), to be filled by the caller
+  // before anything else is written.
+  static constexpr std::size_t kSpan = std::size_t(1) << 20;
+  char *span(std::size_t n) {
+    if (n > kBuffer - used_)
+      flush();
+    char *at = buffer_.get() + used_;
+    used_ += n;
+    return at;
+  }
 
   void close() {
     flush();
@@ -1493,20 +1511,20 @@ public:
   }
 
 private:
-  void flush() {
-    if (!buffer_.empty() &&
-        std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size() && !error_)
+  void put(const char *data, std::size_t n) {
+    if (n && std::fwrite(data, 1, n, file_) != n && !error_)
       error_ = errno ? errno : EIO;
-    buffer_.clear();
   }
-  void flush_if_full() {
-    if (buffer_.size() >= (std::size_t(1) << 20))
-      flush();
+  void flush() {
+    put(buffer_.get(), used_);
+    used_ = 0;
   }
 
+  static constexpr std::size_t kBuffer = std::size_t(4) << 20;
   std::string path_;
   std::FILE *file_;
-  std::string buffer_;
+  std::unique_ptr<char[]> buffer_ = std::make_unique_for_overwrite<char[]>(kBuffer);
+  std::size_t used_ = 0;
   int error_ = 0;
 };
 
@@ -1607,7 +1625,8 @@ struct EntityPlan {
   std::vector<Entity> entities;
   std::vector<Block> blocks;
   // The cells in file order: grouped by entity, entities in order of first
-  // appearance, cells of one entity in mesh order. A cell's element tag is
+  // appearance, cells of one entity in mesh order (empty: one entity, the
+  // cells in mesh order). A cell's element tag is
   // its index in the mesh plus one (readers that go by tags, Gmsh and ours,
   // get the mesh's order back); $ElementData lists the cells in file order
   // with those tags (meshio pairs data with elements by position).
@@ -1623,34 +1642,65 @@ EntityPlan plan_entities(const std::string &path, const Mesh &mesh, const Simple
   const DataArray *geom = set.geom, *phys = set.phys;
   const int nvs = set.dim + 1;
   long long next_tag = 1;
+  if (nc == 0)
+    return plan;
+  // Tags are checked where they change from the cell before (a NaN always
+  // does): the first bad one is still the one reported.
   if (geom)
     for (std::size_t c = 0; c < nc; ++c)
-      next_tag = std::max(next_tag, tag_value(path, geom, c, set.what) + 1);
+      if (c == 0 || !(geom->values[c] == geom->values[c - 1]))
+        next_tag = std::max(next_tag, tag_value(path, geom, c, set.what) + 1);
   std::map<std::pair<long long, long long>, std::size_t> entity_of;
   std::set<long long> taken;
-  std::vector<std::size_t> entity_of_cell(nc);
+  const auto entity_of_cell = std::make_unique_for_overwrite<std::uint32_t[]>(nc);
+  // Cells come in runs of one (geometrical, physical) pair: the map is asked
+  // when the pair changes, not for every cell (10.8 M tets of one entity:
+  // a fifth of the .msh write's time went to the map and to reading every
+  // cell's points for the boxes).
+  std::size_t last = std::size_t(-1);
+  double last_g = 0, last_p = 0;
+  // The box of an entity takes each vertex once in a row: in_box[v] is the
+  // last entity whose box took v (nobody: kNoEntity).
+  constexpr std::uint32_t kNoEntity = std::uint32_t(-1);
+  std::vector<std::uint32_t> in_box(mesh.num_vertices(), kNoEntity);
   for (std::size_t c = 0; c < nc; ++c) {
-    const long long g = tag_value(path, geom, c, set.what), p = tag_value(path, phys, c, set.what);
-    auto [it, added] = entity_of.emplace(std::make_pair(g, p), plan.entities.size());
-    if (added) {
-      Entity e;
-      e.tag = geom && !taken.count(g) ? g : next_tag++;
-      if (e.tag > INT_MAX)
-        throw InputError(path, "too many distinct gmsh:geometrical / gmsh:physical pairs");
-      e.physical = p;
-      taken.insert(e.tag);
-      plan.entities.push_back(e);
+    const double gv = geom ? geom->values[c] : 0.0, pv = phys ? phys->values[c] : 0.0;
+    if (last == std::size_t(-1) || !(gv == last_g) || !(pv == last_p)) {
+      const long long g = tag_value(path, geom, c, set.what),
+                      p = tag_value(path, phys, c, set.what);
+      auto [it, added] = entity_of.emplace(std::make_pair(g, p), plan.entities.size());
+      if (added) {
+        Entity e;
+        e.tag = geom && !taken.count(g) ? g : next_tag++;
+        if (e.tag > INT_MAX)
+          throw InputError(path, "too many distinct gmsh:geometrical / gmsh:physical pairs");
+        e.physical = p;
+        taken.insert(e.tag);
+        plan.entities.push_back(e);
+      }
+      last = it->second;
+      last_g = gv;
+      last_p = pv;
     }
-    Entity &e = plan.entities[it->second];
+    Entity &e = plan.entities[last];
     for (int k = 0; k < nvs; ++k) {
-      const double *x = mesh.point(set.ids[c * std::size_t(nvs) + std::size_t(k)]);
+      const VertexId v = set.ids[c * std::size_t(nvs) + std::size_t(k)];
+      if (in_box[v] == std::uint32_t(last))
+        continue;
+      in_box[v] = std::uint32_t(last);
+      const double *x = mesh.point(v);
       for (int i = 0; i < 3; ++i) {
         const double xi = i < mesh.dim ? x[i] : 0.0;
         e.lo[i] = std::min(e.lo[i], xi);
         e.hi[i] = std::max(e.hi[i], xi);
       }
     }
-    entity_of_cell[c] = it->second;
+    entity_of_cell[c] = std::uint32_t(last);
+  }
+  // One entity: the cells in mesh order (order stays empty).
+  if (plan.entities.size() == 1) {
+    plan.blocks.push_back({0, 0, nc});
+    return plan;
   }
   // Counting sort of the cells by entity.
   std::vector<std::size_t> count(plan.entities.size(), 0);
@@ -1715,13 +1765,22 @@ void write_nodes(Output &out, const Mesh &mesh, long long entity) {
     out.int32(entity);
     out.int32(0); // not parametric
     out.size(nv);
-    for (std::size_t v = 0; v < nv; ++v)
-      out.size(v + 1);
-    for (std::size_t v = 0; v < nv; ++v)
-      for (int i = 0; i < 3; ++i)
-        out.raw<double>(i < mesh.dim ? mesh.point(VertexId(v))[i]
-                        : plane_z    ? plane_z->values[v]
-                                     : 0.0);
+    constexpr std::size_t kRun = Output::kSpan / 24;
+    for (std::size_t v0 = 0; v0 < nv; v0 += kRun) {
+      const std::size_t n = std::min(kRun, nv - v0);
+      char *at = out.span(n * 8);
+      for (std::size_t v = v0; v < v0 + n; ++v, at += 8)
+        store<std::uint64_t>(at, v + 1);
+    }
+    for (std::size_t v0 = 0; v0 < nv; v0 += kRun) {
+      const std::size_t n = std::min(kRun, nv - v0);
+      char *at = out.span(n * 24);
+      for (std::size_t v = v0; v < v0 + n; ++v)
+        for (int i = 0; i < 3; ++i, at += 8)
+          store<double>(at, i < mesh.dim ? mesh.point(VertexId(v))[i]
+                            : plane_z    ? plane_z->values[v]
+                                         : 0.0);
+    }
   }
   out.text("\n$EndNodes\n");
 }
@@ -1729,7 +1788,7 @@ void write_nodes(Output &out, const Mesh &mesh, long long entity) {
 // The cells (sets[0]) and the entity blocks, each set's element blocks in
 // its plan's order.
 void write_elements(Output &out, const std::vector<SimplexSet> &sets,
-                    const std::vector<EntityPlan> &plans) {
+                    const std::vector<EntityPlan> &plans, const std::uint8_t *flipped) {
   std::size_t blocks = 0, total = 0;
   for (std::size_t i = 0; i < sets.size(); ++i) {
     blocks += plans[i].blocks.size();
@@ -1748,14 +1807,26 @@ void write_elements(Output &out, const std::vector<SimplexSet> &sets,
       out.int32(plans[i].entities[b.entity].tag);
       out.int32(kSimplexType[set.dim]);
       out.size(b.count);
-      for (std::size_t j = b.first; j < b.first + b.count; ++j) {
-        const std::size_t c = plans[i].order[j];
-        // Cells: tag = index + 1 (the cell order survives a round trip).
-        // Entities: tags in file order, which meshio's binary $ElementData
-        // reader needs (whose order is of no concern).
-        out.size(set.first_tag + (i == 0 ? c : j) + 1);
-        for (std::size_t k = 0; k < nvs; ++k)
-          out.size(std::uint64_t(set.ids[c * nvs + k]) + 1);
+      const std::size_t record = 8 * (1 + nvs), run = Output::kSpan / record;
+      const std::uint8_t *flip = i == 0 ? flipped : nullptr;
+      for (std::size_t j0 = b.first; j0 < b.first + b.count; j0 += run) {
+        const std::size_t j1 = std::min(b.first + b.count, j0 + run);
+        char *at = out.span((j1 - j0) * record);
+        for (std::size_t j = j0; j < j1; ++j) {
+          const std::size_t c = plans[i].order.empty() ? j : plans[i].order[j];
+          // Cells: tag = index + 1 (the cell order survives a round trip).
+          // Entities: tags in file order, which meshio's binary $ElementData
+          // reader needs (whose order is of no concern). A flipped cell
+          // (stream_state) goes with its first two ids swapped.
+          store<std::uint64_t>(at, set.first_tag + (i == 0 ? c : j) + 1);
+          const VertexId *x = set.ids + c * nvs;
+          const std::size_t s = flip && flip[c] ? 1 : 0;
+          store<std::uint64_t>(at + 8, std::uint64_t(x[s]) + 1);
+          store<std::uint64_t>(at + 16, std::uint64_t(x[1 - s]) + 1);
+          for (std::size_t k = 2; k < nvs; ++k)
+            store<std::uint64_t>(at + 8 * (k + 1), std::uint64_t(x[k]) + 1);
+          at += record;
+        }
       }
     }
   }
@@ -1770,19 +1841,79 @@ void write_physical_names(Output &out, const std::vector<PhysicalName> &names) {
   out.text("$EndPhysicalNames\n");
 }
 
+// An array as the data sections read it: a DataArray's values, or a
+// bisection state source's (stream_state: the cells' state written without
+// storing it as arrays of doubles first).
+struct Rows {
+  static constexpr std::size_t kPiece = 1024;
+  const std::string &name;
+  int components = 1;
+  const DataArray *array = nullptr;
+  const ArraySource *source = nullptr;
+  // Values first .. first + n - 1 into out.
+  void fill(std::size_t first, std::size_t n, double *out) const {
+    if (array)
+      std::copy_n(array->values.data() + first, n, out);
+    else if (source->fill)
+      source->fill(first, n, out);
+    else
+      for (std::size_t i = 0; i < n; ++i)
+        out[i] = source->value(first + i);
+  }
+};
+Rows rows_of(const DataArray &a) {
+  return {a.name, a.components, &a, nullptr};
+}
+Rows rows_of(const ArraySource &a) {
+  return {a.name, a.components, nullptr, &a};
+}
+
+// Rows order[j] of `a` (j < n; row j when order is empty), or zeros for a
+// null `a`, each after its tag: first_tag + 1 + the row, or + j with
+// `by_position`. Runs of consecutive rows are filled at once.
+void write_rows(Output &out, const Rows *a, std::size_t components, std::size_t n,
+                const std::vector<std::size_t> &order, std::size_t first_tag, bool by_position) {
+  const std::size_t nc = components, record = 4 + 8 * nc;
+  std::vector<double> values(std::max(Rows::kPiece, nc));
+  const std::size_t run =
+      std::max<std::size_t>(1, std::min(Output::kSpan / record, values.size() / nc));
+  for (std::size_t j0 = 0; j0 < n;) {
+    const std::size_t first = order.empty() ? j0 : order[j0];
+    std::size_t j1 = j0 + 1;
+    while (j1 < n && j1 - j0 < run && (order.empty() ? j1 : order[j1]) == first + (j1 - j0))
+      ++j1;
+    const std::size_t rows = j1 - j0;
+    if (a)
+      a->fill(first * nc, rows * nc, values.data());
+    else
+      std::fill_n(values.data(), rows * nc, 0.0);
+    auto tag = [&](std::size_t i) {
+      return std::int32_t(first_tag + 1 + (by_position ? j0 + i : first + i));
+    };
+    if (record <= Output::kSpan) {
+      char *at = out.span(rows * record);
+      for (std::size_t i = 0; i < rows; ++i, at += record) {
+        store<std::int32_t>(at, tag(i));
+        std::memcpy(at + 4, values.data() + i * nc, 8 * nc);
+      }
+    } else {
+      for (std::size_t i = 0; i < rows; ++i) {
+        out.int32(tag(i));
+        for (std::size_t k = 0; k < nc; ++k)
+          out.raw<double>(values[i * nc + k]);
+      }
+    }
+    j0 = j1;
+  }
+}
+
 // One $NodeData/$ElementData section: time 0, time step 0. Row i is entity
 // order[i] (tag order[i] + 1; the identity when order is empty).
-void write_data(Output &out, const std::string &section, const DataArray &a, std::size_t n,
+void write_data(Output &out, const std::string &section, const Rows &a, std::size_t n,
                 const std::vector<std::size_t> &order = {}) {
   out.text("$" + section + "\n1\n\"" + a.name + "\"\n1\n0\n3\n0\n" + std::to_string(a.components) +
            "\n" + std::to_string(n) + "\n");
-  const std::size_t nc = std::size_t(a.components);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t row = order.empty() ? i : order[i];
-    out.int32((long long)(row + 1));
-    for (std::size_t k = 0; k < nc; ++k)
-      out.raw<double>(a.values[row * nc + k]);
-  }
+  write_rows(out, &a, std::size_t(a.components), n, order, 0, false);
   out.text("\n$End" + section + "\n");
 }
 
@@ -1790,7 +1921,7 @@ void write_data(Output &out, const std::string &section, const DataArray &a, std
 // too (meshio pairs element data with every element by position): an
 // entity's own value of the array (same name and components) or 0. Readers
 // that go by tags, ours included, ignore those rows.
-void write_element_data(Output &out, const DataArray &a, const std::vector<SimplexSet> &sets,
+void write_element_data(Output &out, const Rows &a, const std::vector<SimplexSet> &sets,
                         const std::vector<EntityPlan> &plans, const std::vector<Entities> &blocks) {
   if (sets.size() == 1)
     return write_data(out, "ElementData", a, sets[0].count, plans[0].order);
@@ -1801,20 +1932,22 @@ void write_element_data(Output &out, const DataArray &a, const std::vector<Simpl
            "\n" + std::to_string(n) + "\n");
   const std::size_t nc = std::size_t(a.components);
   for (std::size_t i = 0; i < sets.size(); ++i) {
-    const DataArray *own = &a;
-    if (i > 0) { // sets[i] is the block of entities whose vertices it points at
-      own = nullptr;
-      for (const Entities &b : blocks)
-        if (b.vertices.data() == sets[i].ids)
-          for (const DataArray &e : b.data)
-            if (e.name == a.name && e.components == a.components)
-              own = &e;
+    if (i == 0) {
+      write_rows(out, &a, nc, sets[0].count, plans[0].order, sets[0].first_tag, false);
+      continue;
     }
-    for (std::size_t j = 0; j < sets[i].count; ++j) {
-      const std::size_t row = plans[i].order[j];
-      out.int32((long long)(sets[i].first_tag + (i == 0 ? row : j) + 1));
-      for (std::size_t k = 0; k < nc; ++k)
-        out.raw<double>(own ? own->values[row * nc + k] : 0.0);
+    // sets[i] is the block of entities whose vertices it points at
+    const DataArray *own = nullptr;
+    for (const Entities &b : blocks)
+      if (b.vertices.data() == sets[i].ids)
+        for (const DataArray &e : b.data)
+          if (e.name == a.name && e.components == a.components)
+            own = &e;
+    if (own) {
+      const Rows rows = rows_of(*own);
+      write_rows(out, &rows, nc, sets[i].count, plans[i].order, sets[i].first_tag, true);
+    } else {
+      write_rows(out, nullptr, nc, sets[i].count, plans[i].order, sets[i].first_tag, true);
     }
   }
   out.text("\n$EndElementData\n");
@@ -1830,6 +1963,10 @@ Mesh read_msh(const std::string &path) {
 }
 
 void write_msh(const std::string &path, const Mesh &mesh) {
+  write_msh_with_state(path, mesh, nullptr);
+}
+
+void write_msh_with_state(const std::string &path, const Mesh &mesh, const StateArrays *state) {
   check_writable(path, mesh);
   const DataArray *geom = entity_array(mesh.cell_data, "gmsh:geometrical");
   const DataArray *phys = entity_array(mesh.cell_data, "gmsh:physical");
@@ -1872,13 +2009,22 @@ void write_msh(const std::string &path, const Mesh &mesh) {
   if (geom || phys || sets.size() > 1)
     write_entities(out, by_dim);
   write_nodes(out, mesh, plans[0].entities.empty() ? 1 : plans[0].entities.front().tag);
-  write_elements(out, sets, plans);
+  const std::uint8_t *flipped =
+      state && state->flipped.size() == mesh.num_cells() ? state->flipped.data() : nullptr;
+  write_elements(out, sets, plans, flipped);
+  // The state's arrays after the mesh's own, as encode_state would add them.
   for (const DataArray &a : mesh.point_data)
-    if (&a != plane_z_of(mesh))
-      write_data(out, "NodeData", a, mesh.num_vertices());
+    if (&a != plane_z_of(mesh) && !(state && state->hides(a.name)))
+      write_data(out, "NodeData", rows_of(a), mesh.num_vertices());
+  if (state)
+    for (const ArraySource &a : state->points)
+      write_data(out, "NodeData", rows_of(a), mesh.num_vertices());
   for (const DataArray &a : mesh.cell_data)
-    if (&a != geom && &a != phys)
-      write_element_data(out, a, sets, plans, mesh.entities);
+    if (&a != geom && &a != phys && !(state && state->hides(a.name)))
+      write_element_data(out, rows_of(a), sets, plans, mesh.entities);
+  if (state)
+    for (const ArraySource &a : state->cells)
+      write_element_data(out, rows_of(a), sets, plans, mesh.entities);
   out.close();
 }
 

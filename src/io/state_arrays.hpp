@@ -85,4 +85,8 @@ private:
   const StoredArray *s_ = nullptr;
 };
 
+// write_msh with the state's arrays streamed (null: none), flipped cells
+// written with their first two ids swapped (msh.cpp).
+void write_msh_with_state(const std::string &path, const Mesh &mesh, const StateArrays *state);
+
 } // namespace bisect
