@@ -1814,11 +1814,13 @@ void write_elements(Output &out, const std::vector<SimplexSet> &sets,
         char *at = out.span((j1 - j0) * record);
         for (std::size_t j = j0; j < j1; ++j) {
           const std::size_t c = plans[i].order.empty() ? j : plans[i].order[j];
-          // Cells: tag = index + 1 (the cell order survives a round trip).
-          // Entities: tags in file order, which meshio's binary $ElementData
-          // reader needs (whose order is of no concern). A flipped cell
-          // (stream_state) goes with its first two ids swapped.
-          store<std::uint64_t>(at, set.first_tag + (i == 0 ? c : j) + 1);
+          // Tags in file order, which meshio's binary $ElementData reader
+          // needs (its rows' tags must be 1, 2, ... in order): the cells of
+          // one entity, the cells' index + 1, keep the mesh's order on a
+          // round trip; with several, the cells come back grouped by
+          // entity. A flipped cell (stream_state) goes with its first two
+          // ids swapped.
+          store<std::uint64_t>(at, set.first_tag + j + 1);
           const VertexId *x = set.ids + c * nvs;
           const std::size_t s = flip && flip[c] ? 1 : 0;
           store<std::uint64_t>(at + 8, std::uint64_t(x[s]) + 1);
@@ -1869,10 +1871,10 @@ Rows rows_of(const ArraySource &a) {
 }
 
 // Rows order[j] of `a` (j < n; row j when order is empty), or zeros for a
-// null `a`, each after its tag: first_tag + 1 + the row, or + j with
-// `by_position`. Runs of consecutive rows are filled at once.
+// null `a`, each after its tag first_tag + 1 + j. Runs of consecutive rows
+// are filled at once.
 void write_rows(Output &out, const Rows *a, std::size_t components, std::size_t n,
-                const std::vector<std::size_t> &order, std::size_t first_tag, bool by_position) {
+                const std::vector<std::size_t> &order, std::size_t first_tag) {
   const std::size_t nc = components, record = 4 + 8 * nc;
   std::vector<double> values(std::max(Rows::kPiece, nc));
   const std::size_t run =
@@ -1887,9 +1889,7 @@ void write_rows(Output &out, const Rows *a, std::size_t components, std::size_t 
       a->fill(first * nc, rows * nc, values.data());
     else
       std::fill_n(values.data(), rows * nc, 0.0);
-    auto tag = [&](std::size_t i) {
-      return std::int32_t(first_tag + 1 + (by_position ? j0 + i : first + i));
-    };
+    auto tag = [&](std::size_t i) { return std::int32_t(first_tag + 1 + j0 + i); };
     if (record <= Output::kSpan) {
       char *at = out.span(rows * record);
       for (std::size_t i = 0; i < rows; ++i, at += record) {
@@ -1908,12 +1908,12 @@ void write_rows(Output &out, const Rows *a, std::size_t components, std::size_t 
 }
 
 // One $NodeData/$ElementData section: time 0, time step 0. Row i is entity
-// order[i] (tag order[i] + 1; the identity when order is empty).
+// order[i] (the identity when order is empty), with tag i + 1.
 void write_data(Output &out, const std::string &section, const Rows &a, std::size_t n,
                 const std::vector<std::size_t> &order = {}) {
   out.text("$" + section + "\n1\n\"" + a.name + "\"\n1\n0\n3\n0\n" + std::to_string(a.components) +
            "\n" + std::to_string(n) + "\n");
-  write_rows(out, &a, std::size_t(a.components), n, order, 0, false);
+  write_rows(out, &a, std::size_t(a.components), n, order, 0);
   out.text("\n$End" + section + "\n");
 }
 
@@ -1933,7 +1933,7 @@ void write_element_data(Output &out, const Rows &a, const std::vector<SimplexSet
   const std::size_t nc = std::size_t(a.components);
   for (std::size_t i = 0; i < sets.size(); ++i) {
     if (i == 0) {
-      write_rows(out, &a, nc, sets[0].count, plans[0].order, sets[0].first_tag, false);
+      write_rows(out, &a, nc, sets[0].count, plans[0].order, sets[0].first_tag);
       continue;
     }
     // sets[i] is the block of entities whose vertices it points at
@@ -1945,9 +1945,9 @@ void write_element_data(Output &out, const Rows &a, const std::vector<SimplexSet
             own = &e;
     if (own) {
       const Rows rows = rows_of(*own);
-      write_rows(out, &rows, nc, sets[i].count, plans[i].order, sets[i].first_tag, true);
+      write_rows(out, &rows, nc, sets[i].count, plans[i].order, sets[i].first_tag);
     } else {
-      write_rows(out, nullptr, nc, sets[i].count, plans[i].order, sets[i].first_tag, true);
+      write_rows(out, nullptr, nc, sets[i].count, plans[i].order, sets[i].first_tag);
     }
   }
   out.text("\n$EndElementData\n");
