@@ -22,11 +22,14 @@ int run_check(const CheckArgs &a) {
   const LoadProgress progress = load_progress(path, a.flags.quiet);
   if (progress)
     progress("reading", 0.0);
-  StoredState stored; // a .vtu's bisection state, not checked here: kept small
+  // The file's bisection state is checked too, as every command that reads
+  // it does (an altered one is an input error, exit 1): a file that passes
+  // here refines and coarsens.
+  StoredState stored;
   Mesh mesh = read_mesh(path, stored);
-  stored = {};
   InputFacts facts;
-  prepare_input(mesh, path, progress, &facts);
+  prepare_read_mesh(mesh, path, progress, facts, &stored);
+  stored = {};
   InputFacts original;
   const Invariants *orig = nullptr;
   if (!a.against.empty()) {
@@ -65,7 +68,8 @@ Command add_check(CLI::App &app) {
   auto *cmd = app.add_subcommand(
       "check",
       "Check conformity: facets shared by at most two cells, no degenerate or inverted "
-      "cell; with --against, volume, boundary measure and Euler characteristic unchanged.");
+      "cell, and a consistent bisection state (bisect:* arrays) where the file has one; with "
+      "--against, volume, boundary measure and Euler characteristic unchanged.");
   cmd->footer("Example: bisect check ball-10.vtu --against data/ball.msh   (exit 2 names the "
               "first failure)");
   cmd->add_option("input", a->input, "Mesh file (.vtu or .msh; - reads standard input)")

@@ -53,4 +53,21 @@ for name in ["ours-zlib.vtu", "ours-none.vtu", "ours.msh"]:
         assert sum(len(a) for a in m.cell_data[key]) == n, (name, key)
     print(name, n, "tets,", len(m.cell_data), "cell arrays")
 PY
-echo "meshio_vtu: $n files ok, and meshio reads bisect's .vtu (zlib, none) and .msh"
+# A bisection state altered by a user (one cell's bisect:state, through
+# meshio): every command that reads it refuses the file, check included.
+expect_exit 0 "$BISECT" generate kuhn --dim 3 --cells 2 -o kuhn.vtu
+expect_exit 0 "$BISECT" refine kuhn.vtu --region "$ROOT/data/regions/sphere.json" -n 3 -o kuhn-r.vtu -q --quality-csv none
+expect_exit 0 "$BISECT" check kuhn-r.vtu
+/usr/bin/python3 - <<'PY' || fail "meshio could not alter the state"
+import meshio
+m = meshio.read("kuhn-r.vtu")
+s = m.cell_data["bisect:state"][0]
+s[4] = int(s[4]) ^ 1
+meshio.write("kuhn-altered.vtu", m)
+PY
+for cmd in check info; do
+  expect_exit 1 "$BISECT" $cmd kuhn-altered.vtu
+  grep -q "kuhn-altered.vtu: the bisection state is inconsistent" "$WORK/err" ||
+    fail "$cmd of an altered state: $(cat "$WORK/err")"
+done
+echo "meshio_vtu: $n files ok, and meshio reads bisect's .vtu (zlib, none) and .msh; an altered state is refused"
