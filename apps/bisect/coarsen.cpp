@@ -1,6 +1,8 @@
 // bisect coarsen: read, undo bisections along the tree where marked, check, write.
 #include "cli.hpp"
 
+#include <algorithm>
+
 #include "bisect/coarsen.hpp"
 #ifdef BISECT_MPI
 #include "mpi/refine_mpi.hpp"
@@ -94,6 +96,15 @@ int run_coarsen(const CoarsenArgs &a) {
 
   Mesh mesh = load_mesh(a.input, load_progress(a.input, a.flags.quiet));
   check_output_format(out, mesh.dim, a.format);
+  for (const std::string &name : a.sums)
+    if (std::none_of(mesh.cell_data.begin(), mesh.cell_data.end(),
+                     [&](const DataArray &d) { return d.name == name; })) {
+      std::string have;
+      for (const DataArray &d : mesh.cell_data)
+        have += (have.empty() ? "'" : ", '") + d.name + "'";
+      throw InputError(a.input, "--sum " + name + ": no cell array of that name (the file has " +
+                                    (have.empty() ? std::string("none") : have) + ")");
+    }
   const std::size_t cells0 = mesh.num_cells(), verts0 = mesh.num_vertices();
   const std::vector<char> marks = marked_cells(mesh, a);
   if (!quiet) {

@@ -743,11 +743,30 @@ private:
 
 } // namespace
 
+namespace {
+// The arrays options name must be the mesh's: a misspelt name would
+// silently leave its array under the default rule.
+void check_array_names(const Mesh &mesh, const CoarsenOptions &options) {
+  for (const std::vector<std::string> *names : {&options.sum_arrays, &options.min_arrays})
+    for (const std::string &name : *names)
+      if (std::none_of(mesh.cell_data.begin(), mesh.cell_data.end(),
+                       [&](const DataArray &a) { return a.name == name; })) {
+        std::string have;
+        for (const DataArray &a : mesh.cell_data)
+          have += (have.empty() ? "'" : ", '") + a.name + "'";
+        throw UsageError("coarsen: no cell array '" + name + "' to " +
+                         (names == &options.sum_arrays ? "sum" : "take the minimum of") +
+                         " (the mesh has " + (have.empty() ? "none" : have) + ")");
+      }
+}
+} // namespace
+
 CoarsenPass coarsen_pass_among(Mesh &mesh, std::vector<char> &marks,
                                const std::vector<char> &eligible, const CoarsenOptions &options,
                                std::vector<char> &removed) {
   if (marks.size() != mesh.num_cells() || eligible.size() != mesh.num_vertices())
     throw std::logic_error("coarsen_pass_among: marks or eligibility not sized for the mesh");
+  check_array_names(mesh, options);
   removed.assign(mesh.num_vertices(), 0);
   if (!mesh.marked() || !mesh.has_tree())
     return {};
@@ -764,6 +783,7 @@ CoarsenResult coarsen(Mesh &mesh, const std::vector<char> &marked_cells,
   if (marked_cells.size() != mesh.num_cells())
     throw UsageError("coarsen: " + std::to_string(marked_cells.size()) + " marks for " +
                      std::to_string(mesh.num_cells()) + " cells");
+  check_array_names(mesh, options);
   CoarsenResult result;
   if (!mesh.marked() || !mesh.has_tree())
     return result;

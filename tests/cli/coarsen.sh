@@ -151,4 +151,10 @@ meshio.write("bad-tree.vtu", m)
 PY
 expect_exit 1 "$BISECT" coarsen bad-tree.vtu --all -o x.vtu
 one_line_naming "bisect:parent_a"
+# A misspelt --sum array is an input error naming the file, not ignored.
+expect_exit 0 "$BISECT" refine "$ROOT/data/square-eta.vtu" --region "$ROOT/data/regions/circle.json" -n 2 -o eta-fine.vtu -q --quality-csv none
+expect_exit 1 "$BISECT" coarsen eta-fine.vtu --all --sum etaa -o eta-back.vtu
+one_line_naming "eta-fine.vtu: --sum etaa: no cell array of that name"
+[[ ! -e eta-back.vtu ]] || fail "coarsen --sum etaa wrote eta-back.vtu"
+expect_exit 0 "$BISECT" coarsen eta-fine.vtu --all --sum eta -o eta-back.vtu -q
 echo "coarsen: ok"

@@ -427,6 +427,18 @@ TEST_CASE("coarsen: cell arrays take the common value, the mean, or the sum", "[
   REQUIRE(total == double(counted.num_cells()));
   REQUIRE(std::all_of(fine.cell_data[2].values.begin(), fine.cell_data[2].values.end(),
                       [](double v) { return v == 0; }));
+  // A name the mesh lacks is an error, not an array left to the default rule.
+  Mesh again = m;
+  refine_locally(again, 2);
+  const Mesh before = again;
+  for (bool sum : {true, false}) {
+    CoarsenOptions bad;
+    (sum ? bad.sum_arrays : bad.min_arrays) = {"cuont"};
+    REQUIRE_THROWS_WITH(coarsen(again, std::vector<char>(again.num_cells(), 1), bad),
+                        Catch::Contains("no cell array 'cuont'") &&
+                            Catch::Contains("'id', 'count'"));
+    REQUIRE(again.cells == before.cells);
+  }
 }
 
 TEST_CASE("coarsen: unmarked cells and a file without the tree stop it", "[coarsen][io]") {
