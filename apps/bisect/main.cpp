@@ -94,7 +94,7 @@ int run(int argc, char **argv) {
                "000-002)."};
   app.footer(kExitCodesHelp);
   app.require_subcommand(1);
-  app.set_version_flag("--version", "bisect 0.1");
+  app.set_version_flag("--version", std::string("bisect ") + BISECT_VERSION);
 
   std::vector<Command> commands{add_refine(app),  add_info(app),   add_check(app),
                                 add_quality(app), add_colour(app), add_extrude(app),
