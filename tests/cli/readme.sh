@@ -10,8 +10,9 @@ ln -s "$ROOT/scripts" "$WORK/run/scripts"
 ln -s "$(dirname "$BISECT")" "$WORK/run/build" # the build tree (cmake --install build ...)
 cd "$WORK/run"
 export PATH="$WORK/bin:$PATH"
-commands=$(awk '/^```/ { if (inside) { inside = 0; next } if ($0 == "```sh") { inside = 1; next } }
-                inside { print }' "$ROOT/README.md")
+# Fences may be indented (an example inside a list item): so may its lines.
+commands=$(awk '/^ *```/ { if (inside) { inside = 0; next } if ($0 ~ /^ *```sh$/) { inside = 1; next } }
+                inside { sub(/^ +/, ""); print }' "$ROOT/README.md")
 [[ -n $commands ]] || fail "no sh blocks in README.md"
 count=0
 while IFS= read -r line; do
