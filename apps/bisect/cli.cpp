@@ -102,6 +102,13 @@ void check_extension(const std::string &out) {
       c = char(std::tolower(static_cast<unsigned char>(c)));
     return e;
   }();
+#ifndef BISECT_MPI
+  if (ext == ".pvtu")
+    throw UsageError(out + ": a .pvtu output is the distributed run's, and this bisect was built "
+                           "without MPI: use the MPI build (cmake -DBISECT_MPI=ON; "
+                           "scripts/test.sh makes build-mpi/bisect), or end the output in .vtu "
+                           "or .msh");
+#endif
   if (ext != ".vtu" && ext != ".msh")
     throw UsageError(out + ": output must end in .vtu or .msh");
 }

@@ -82,6 +82,20 @@ int main(int argc, char **argv) {
   mpi_stop();
   return code;
 #else
+  // mpirun starting copies of a build without MPI: each would run the whole
+  // job and write the same files. Refused, said once (by the first copy).
+  for (const char *size : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
+    if (const char *n = std::getenv(size); n && std::atoi(n) > 1) {
+      const char *rank = std::getenv("OMPI_COMM_WORLD_RANK");
+      if (!rank)
+        rank = std::getenv("PMI_RANK");
+      if (!rank || std::atoi(rank) == 0)
+        std::cerr << "bisect: mpirun started " << n
+                  << " copies of a bisect built without MPI, each of which would run the whole "
+                     "job: use the MPI build (cmake -DBISECT_MPI=ON; scripts/test.sh makes "
+                     "build-mpi/bisect)\n";
+      return 1;
+    }
   return run(argc, argv);
 #endif
 }

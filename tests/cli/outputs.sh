@@ -186,4 +186,15 @@ for f in 0.02 0.15 0.3 0.45 0.6 0.75 0.85 0.95 1.1; do
 done
 echo "outputs: a run takes ${run}s; exit codes under SIGINT at 2%..110% of it:$outcomes;" \
   "time from SIGINT to exit:$latencies" >&2
+# The default build has no MPI: a .pvtu output, or mpirun starting several
+# copies, is refused with the way to the MPI build (nothing written).
+expect_exit 1 "$BISECT" refine "$ROOT/data/ball.msh" --region "$ROOT/data/regions/hemisphere.json" -n 1 -o no-mpi.pvtu
+one_line_naming "no-mpi.pvtu: a .pvtu output is the distributed run's, and this bisect was built without MPI"
+[[ ! -e no-mpi.pvtu ]] || fail "no-mpi.pvtu written"
+if ! "$BISECT" --help | grep -q mpirun; then
+  OMPI_COMM_WORLD_SIZE=2 OMPI_COMM_WORLD_RANK=0 expect_exit 1 "$BISECT" refine "$ROOT/data/ball.msh" \
+    --region "$ROOT/data/regions/hemisphere.json" -n 1 -o two-copies.vtu
+  one_line_naming "mpirun started 2 copies of a bisect built without MPI"
+  [[ ! -e two-copies.vtu ]] || fail "two-copies.vtu written"
+fi
 echo "outputs: ok"
