@@ -50,6 +50,9 @@ int run_kuhn(const GenerateArgs &a) {
 std::vector<Command> add_generate(CLI::App &app) {
   auto a = std::make_shared<GenerateArgs>();
   auto *gen_cmd = app.add_subcommand("generate", "Make small meshes: one simplex, or a Kuhn cube.");
+  gen_cmd->footer(
+      "Examples: bisect generate kuhn --dim 3 --cells 4 -o cube.vtu\n          bisect generate "
+      "simplex --dim 4 -o pentatope.vtu   (each kind's --help lists its options)");
   gen_cmd->require_subcommand(1);
   auto *simplex = gen_cmd->add_subcommand("simplex", "One simplex.");
   simplex->footer("Examples: bisect generate simplex --dim 3 --shape random --seed 7 -o tet.vtu\n"

@@ -25,4 +25,8 @@ while IFS= read -r line; do
   [[ $got == 0 ]] || { tail -3 "$WORK/err" >&2; fail "README example exits $got: $line"; }
 done <<<"$commands"
 (( count >= 20 )) || fail "only $count README examples found"
+# Every command's --help ends with an example, as the README promises.
+for cmd in $("$BISECT" --help | awk '/^Subcommands:/ { on = 1; next } on && !NF { exit } on && /^  [a-z]/ { print $1 }'); do
+  "$BISECT" "$cmd" --help | grep -q "^Examples\?: bisect $cmd " || fail "bisect $cmd --help has no example"
+done
 echo "readme: $count examples ran"
