@@ -654,6 +654,58 @@ py::dict data_views(py::object self, bool cells) {
   return out;
 }
 
+// mesh.cell_data / mesh.point_data: the arrays by name, as views
+// (data_views); assigning adds or replaces an array, del removes one. (A
+// dict made on each access took assignments and dropped them.)
+struct DataArrays {
+  py::object mesh;
+  bool cells;
+
+  py::dict views() const { return data_views(mesh, cells); }
+  std::vector<DataArray> &arrays() const {
+    PyMesh &m = mesh.cast<PyMesh &>();
+    return cells ? m.mesh.cell_data : m.mesh.point_data;
+  }
+  void set(const std::string &name, const py::handle &value) const {
+    PyMesh &m = mesh.cast<PyMesh &>();
+    check_idle(m);
+    if (name.rfind("bisect:", 0) == 0) // the state's, and a plane's z (bisect:z)
+      throw bisect::UsageError("'" + name + "': names bisect:* are bisect's own");
+    const std::size_t count = cells ? m.mesh.num_cells() : m.mesh.num_vertices();
+    DataArray a = data_array(name, value, count, cells ? "cell" : "point", "");
+    auto &slots = cells ? m.cell_views : m.point_views;
+    std::vector<DataArray> &list = arrays();
+    for (DataArray &old : list)
+      if (old.name == name) {
+        // Views of the old array keep its values.
+        if (auto it = slots.find(name); it != slots.end()) {
+          hand_over(it->second, old.values);
+          slots.erase(it);
+        }
+        old = std::move(a);
+        return;
+      }
+    list.push_back(std::move(a));
+  }
+  void remove(const std::string &name) const {
+    PyMesh &m = mesh.cast<PyMesh &>();
+    check_idle(m);
+    std::vector<DataArray> &list = arrays();
+    auto at =
+        std::find_if(list.begin(), list.end(), [&](const DataArray &a) { return a.name == name; });
+    if (at == list.end())
+      throw py::key_error(name);
+    if (name.rfind("bisect:", 0) == 0)
+      throw bisect::UsageError("'" + name + "': names bisect:* are bisect's own");
+    auto &slots = cells ? m.cell_views : m.point_views;
+    if (auto it = slots.find(name); it != slots.end()) {
+      hand_over(it->second, at->values);
+      slots.erase(it);
+    }
+    list.erase(at);
+  }
+};
+
 } // namespace
 
 PYBIND11_MODULE(pybisect, m) {
@@ -730,11 +782,19 @@ PYBIND11_MODULE(pybisect, m) {
           "(m, dim+1) uint32, read-only view of the vertex ids in bisection-tuple order "
           "(to_meshio and write orient them positively)")
       .def_property_readonly(
-          "point_data", [](py::object self) { return data_views(self, false); },
-          "dict name -> writable float64 view (n,) or (n, k)")
+          "point_data",
+          [](py::object self) {
+            return DataArrays{self, false};
+          },
+          "name -> writable float64 view (n,) or (n, k); assign an array of n rows to add or "
+          "replace one, del to remove one")
       .def_property_readonly(
-          "cell_data", [](py::object self) { return data_views(self, true); },
-          "dict name -> writable float64 view (m,) or (m, k)")
+          "cell_data",
+          [](py::object self) {
+            return DataArrays{self, true};
+          },
+          "name -> writable float64 view (m,) or (m, k); assign an array of m rows to add or "
+          "replace one, del to remove one")
       .def("coarsen", &coarsen, py::arg("marked") = py::none(), py::arg("passes") = 1,
            py::arg("sum") = std::vector<std::string>{},
            "Undo bisections along the bisection tree: a created vertex goes when its whole star "
@@ -804,6 +864,35 @@ PYBIND11_MODULE(pybisect, m) {
       py::arg("path"),
       "read(path) -> Mesh: a .vtu or .msh file, validated, oriented, with its bisection state "
       "restored when bisect wrote it (load_mesh).");
+  py::class_<DataArrays>(m, "DataArrays",
+                         "A Mesh's cell or point arrays by name (a mapping): numpy views over "
+                         "the mesh's memory; assigning an array with a row per cell (vertex) adds "
+                         "or replaces one, del removes one; refinement carries them on.")
+      .def("__getitem__",
+           [](const DataArrays &d, const std::string &name) -> py::object {
+             py::dict v = d.views();
+             if (!v.contains(name))
+               throw py::key_error(name);
+             return v[py::str(name)];
+           })
+      .def("__setitem__", &DataArrays::set)
+      .def("__delitem__", &DataArrays::remove)
+      .def("__contains__",
+           [](const DataArrays &d, const std::string &name) { return d.views().contains(name); })
+      .def("__len__", [](const DataArrays &d) { return d.views().size(); })
+      .def("__iter__", [](const DataArrays &d) { return py::iter(d.views()); })
+      .def("keys", [](const DataArrays &d) { return d.views().attr("keys")(); })
+      .def("values", [](const DataArrays &d) { return d.views().attr("values")(); })
+      .def("items", [](const DataArrays &d) { return d.views().attr("items")(); })
+      .def(
+          "get",
+          [](const DataArrays &d, const std::string &name, py::object fallback) -> py::object {
+            py::dict v = d.views();
+            return v.contains(name) ? py::object(v[py::str(name)]) : fallback;
+          },
+          py::arg("name"), py::arg("default") = py::none())
+      .def("__repr__", [](const DataArrays &d) { return py::repr(d.views()); });
+
   m.def("from_meshio", &from_meshio, py::arg("mesh"),
         "from_meshio(m) -> Mesh: the tetra cells of a meshio.Mesh (else its triangles), with its "
         "numeric point and cell data; bisect:* arrays (from to_meshio or a .vtu bisect wrote) "

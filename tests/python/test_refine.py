@@ -129,6 +129,35 @@ def test_views_share_memory_and_survive_refine():
         mesh.points[0, 0] = 1.0
 
 
+def test_arrays_added_replaced_and_removed_by_name(tmp_path):
+    points, cells = kuhn(3, 1)
+    mesh = pybisect.Mesh(points, cells)
+    n = mesh.num_cells
+    mesh.cell_data["eta"] = np.arange(n, dtype=float)
+    mesh.cell_data["grad"] = np.ones((n, 3))
+    mesh.point_data["u"] = np.zeros(len(points))
+    assert set(mesh.cell_data) == {"eta", "grad"} and len(mesh.cell_data) == 2
+    assert "u" in mesh.point_data and mesh.cell_data.get("nope") is None
+    old = mesh.cell_data["eta"]
+    mesh.cell_data["eta"] = np.full(n, 7.0)  # replaced; the old view keeps its values
+    assert np.array_equal(old, np.arange(n)) and np.all(mesh.cell_data["eta"] == 7.0)
+    mesh.refine(np.arange(n))
+    assert mesh.cell_data["eta"].shape == (mesh.num_cells,)
+    assert mesh.cell_data["grad"].shape == (mesh.num_cells, 3)
+    del mesh.cell_data["grad"]
+    assert set(mesh.cell_data) == {"eta"}
+    with pytest.raises(KeyError):
+        del mesh.cell_data["grad"]
+    with pytest.raises(pybisect.Error, match="rows"):
+        mesh.cell_data["short"] = np.zeros(3)
+    with pytest.raises(pybisect.Error, match="bisect"):
+        mesh.cell_data["bisect:state"] = np.zeros(mesh.num_cells)
+    path = str(tmp_path / "arrays.vtu")
+    mesh.write(path)
+    back = pybisect.read(path)
+    assert np.all(back.cell_data["eta"] == 7.0) and "u" in back.point_data
+
+
 def test_copy_is_independent():
     points, cells = kuhn(2, 2)
     mesh = pybisect.Mesh(points, cells)
