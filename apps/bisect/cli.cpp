@@ -139,6 +139,16 @@ void add_origin_array(Mesh &mesh) {
   mesh.cell_data.push_back(std::move(origin));
 }
 
+void validate_result(const Mesh &mesh, const std::string &out) {
+  Mesh copy = mesh; // validation orients the cells: the result is written as made
+  try {
+    prepare_input(copy, out, nullptr);
+  } catch (const InputError &e) {
+    throw CheckError(std::string(e.what()) + " (the result fails the validation every read makes; "
+                                             "nothing written)");
+  }
+}
+
 void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions &options) {
   write_mesh_file_with_state(outputs.file(h), outputs.name(h), mesh, options);
 }
@@ -162,6 +172,7 @@ std::string write_slice(const Mesh &mesh, int axis, double value, OutputSet &out
     throw InputError(outputs.name(h), std::string("the section ") +
                                           (axis == mesh.dim - 1 ? 't' : "xyz"[axis]) + " = " +
                                           std::to_string(value) + " is empty (it misses the mesh)");
+  validate_result(s, outputs.name(h));
   write_mesh_file(outputs.file(h), outputs.name(h), s);
   std::ostringstream line;
   line << "bisect: wrote " << outputs.name(h) << " (" << with_commas(s.num_cells())
@@ -218,6 +229,7 @@ int write_generated(Mesh mesh, const std::string &out, bool force, const CommonF
   OutputSet outputs(std::move(inputs), force);
   const int h = outputs.add(out);
   check_output_format(out, mesh.dim);
+  validate_result(mesh, out);
   if (mesh.marked())
     encode_state(mesh);
   write_mesh_file(outputs.file(h), out, mesh);

@@ -69,6 +69,13 @@ void check_extension(const std::string &out);
 // descends from); a previous run's is replaced.
 void add_origin_array(Mesh &mesh);
 
+// A result made by a command other than refine and coarsen (which check
+// their own), validated before it is written as any read validates a mesh
+// (conforming, no degenerate, folded or overlapping cell, no duplicate
+// vertex): a CheckError (exit 2) naming `out` if it fails, so that a run
+// that exits 0 has written a valid mesh.
+void validate_result(const Mesh &mesh, const std::string &out);
+
 // Writes `mesh` with its bisection state into output `h` of `outputs`.
 void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions &options = {});
 

@@ -50,6 +50,7 @@ int run_colour(const ColourArgs &a) {
   }
   if (!out.empty()) {
     set_colour_array(mesh, colour);
+    validate_result(mesh, out);
     write_mesh_file(outputs.file(h), out, mesh);
     outputs.commit();
     if (!a.flags.quiet)

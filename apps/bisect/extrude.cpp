@@ -22,6 +22,7 @@ int run_extrude_colouring(const std::string &in, const std::vector<double> &slic
   std::string how;
   std::vector<std::uint8_t> colour = colouring_of(mesh, in, barycentric, false, how);
   Mesh st = about_file(in, [&] { return extrude_coloured(mesh, colour, slices); });
+  validate_result(st, out);
   write_output_mesh(outputs, h, st);
   outputs.commit();
   if (flags.json)

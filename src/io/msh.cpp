@@ -1822,11 +1822,10 @@ void write_elements(Output &out, const std::vector<SimplexSet> &sets,
           // ids swapped.
           store<std::uint64_t>(at, set.first_tag + j + 1);
           const VertexId *x = set.ids + c * nvs;
-          const std::size_t s = flip && flip[c] ? 1 : 0;
-          store<std::uint64_t>(at + 8, std::uint64_t(x[s]) + 1);
-          store<std::uint64_t>(at + 16, std::uint64_t(x[1 - s]) + 1);
-          for (std::size_t k = 2; k < nvs; ++k)
-            store<std::uint64_t>(at + 8 * (k + 1), std::uint64_t(x[k]) + 1);
+          const bool swap = flip && flip[c]; // cells only: at least 3 ids
+          for (std::size_t k = 0; k < nvs; ++k)
+            store<std::uint64_t>(at + 8 * (k + 1),
+                                 std::uint64_t(x[swap && k < 2 ? 1 - k : k]) + 1);
           at += record;
         }
       }

@@ -39,6 +39,7 @@
 #include <array>
 #include <bit>
 #include <cassert>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -146,21 +147,47 @@ struct Ranks {
   std::vector<VertexId> vertex; // per rank
 };
 
-bool meets(const Mesh &mesh, CellId c, int axis, double value) {
+// Each vertex's coordinate along the axis, a vertex within 1e-6 of the
+// axis extent of its cells from the plane put on it: a cut that close to a
+// vertex made cut points a rounding error apart on the vertex's edges, and
+// cells between them degenerate (the sample cylinder's vertices at t =
+// 0.49999999999999872 cut at t = 0.5; a Kuhn hypercube cut at t = 1e-7).
+std::vector<double> axis_coordinates(const Mesh &mesh, int axis, double value) {
+  const std::size_t nv = mesh.num_vertices();
+  std::vector<double> x(nv), extent(nv, 0.0);
+  for (std::size_t v = 0; v < nv; ++v)
+    x[v] = mesh.point(VertexId(v))[axis];
+  for (std::size_t c = 0; c < mesh.num_cells(); ++c) {
+    const VertexId *ids = mesh.cell(CellId(c));
+    double lo = x[ids[0]], hi = lo;
+    for (int i = 1; i <= mesh.dim; ++i) {
+      lo = std::min(lo, x[ids[i]]);
+      hi = std::max(hi, x[ids[i]]);
+    }
+    for (int i = 0; i <= mesh.dim; ++i)
+      extent[ids[i]] = std::max(extent[ids[i]], hi - lo);
+  }
+  for (std::size_t v = 0; v < nv; ++v)
+    if (x[v] != value && std::abs(x[v] - value) <= 1e-6 * extent[v])
+      x[v] = value;
+  return x;
+}
+
+bool meets(const Mesh &mesh, const std::vector<double> &at, CellId c, double value) {
   bool below = false, above = false;
   for (int i = 0; i <= mesh.dim; ++i) {
-    const double x = mesh.point(mesh.cell(c)[i])[axis];
+    const double x = at[mesh.cell(c)[i]];
     below |= x <= value;
     above |= x >= value;
   }
   return below && above;
 }
 
-Ranks rank_vertices(const Mesh &mesh, int axis, double value) {
+Ranks rank_vertices(const Mesh &mesh, const std::vector<double> &at, double value) {
   Ranks r;
   r.of.assign(mesh.num_vertices(), kNoVertex);
   for (std::size_t c = 0; c < mesh.num_cells(); ++c)
-    if (meets(mesh, CellId(c), axis, value))
+    if (meets(mesh, at, CellId(c), value))
       for (int i = 0; i <= mesh.dim; ++i)
         if (r.of[mesh.cell(CellId(c))[i]] == kNoVertex) {
           r.of[mesh.cell(CellId(c))[i]] = 0;
@@ -179,13 +206,14 @@ Ranks rank_vertices(const Mesh &mesh, int axis, double value) {
   return r;
 }
 
-Pentatope classify(const Mesh &mesh, const Ranks &ranks, CellId c, int axis, double value) {
+Pentatope classify(const Mesh &mesh, const std::vector<double> &at, const Ranks &ranks, CellId c,
+                   double value) {
   Pentatope p;
   p.n = mesh.dim + 1;
   for (int i = 0; i < p.n; ++i) {
     const VertexId v = mesh.cell(c)[i];
     p.ids[i] = ranks.of[v];
-    const double x = mesh.point(v)[axis];
+    const double x = at[v];
     p.side[i] = x > value ? 1 : x < value ? -1 : 0;
   }
   return p;
@@ -198,12 +226,12 @@ int count_side(const Pentatope &p, int s) {
 // For every facet lying in the plane, the cell that produces it: one on the
 // side x >= value when there is one. (Facets of a tet mesh have 3 vertices;
 // the unused fourth slot stays kNoVertex.)
-std::map<std::array<VertexId, 4>, CellId> in_plane_owners(const Mesh &mesh, const Ranks &ranks,
-                                                          int axis, double value) {
+std::map<std::array<VertexId, 4>, CellId>
+in_plane_owners(const Mesh &mesh, const std::vector<double> &at, const Ranks &ranks, double value) {
   std::map<std::array<VertexId, 4>, CellId> owner;
   std::map<std::array<VertexId, 4>, bool> owner_above;
   for (std::size_t c = 0; c < mesh.num_cells(); ++c) {
-    const Pentatope p = classify(mesh, ranks, CellId(c), axis, value);
+    const Pentatope p = classify(mesh, at, ranks, CellId(c), value);
     if (count_side(p, 0) != p.n - 1)
       continue;
     std::array<VertexId, 4> facet{kNoVertex, kNoVertex, kNoVertex, kNoVertex};
@@ -224,9 +252,10 @@ std::map<std::array<VertexId, 4>, CellId> in_plane_owners(const Mesh &mesh, cons
 
 // The section simplices of cell c (tets of a pentatope, triangles of a tet;
 // a triangle's fourth key unused), as cut-point keys.
-std::vector<Tet> cut_cell(const Mesh &mesh, const Ranks &ranks, CellId c, int axis, double value,
+std::vector<Tet> cut_cell(const Mesh &mesh, const std::vector<double> &at, const Ranks &ranks,
+                          CellId c, double value,
                           const std::map<std::array<VertexId, 4>, CellId> &owners) {
-  const Pentatope p = classify(mesh, ranks, c, axis, value);
+  const Pentatope p = classify(mesh, at, ranks, c, value);
   const int k = p.n - 2; // dimension of the section
   std::vector<Tet> tets;
   if (crosses(p, p.all())) {
@@ -255,6 +284,7 @@ std::vector<Tet> cut_cell(const Mesh &mesh, const Ranks &ranks, CellId c, int ax
 // point, interpolated along its edge (computed once per key).
 struct VertexMaker {
   const Mesh &in;
+  const std::vector<double> &at; // axis_coordinates()
   const Ranks &ranks;
   Mesh &out;
   int axis;
@@ -272,7 +302,7 @@ struct VertexMaker {
     const VertexId a = ranks.vertex[key_first(k)], b = ranks.vertex[key_second(k)];
     const double *pa = in.point(a), *pb = in.point(b);
     // Parameter along a -> b (a ranked below b) where x[axis] reaches the value.
-    const double lambda = a == b ? 0.0 : (value - pa[axis]) / (pb[axis] - pa[axis]);
+    const double lambda = a == b ? 0.0 : (value - at[a]) / (at[b] - at[a]);
     for (int d = 0; d < in.dim; ++d)
       if (d != axis)
         out.coords.push_back(a == b ? pa[d] : pa[d] + lambda * (pb[d] - pa[d]));
@@ -330,12 +360,13 @@ Mesh slice_mesh(const Mesh &mesh4, int axis, double value) {
   for (const DataArray &a : mesh4.point_data)
     out.point_data.push_back({a.name, a.components, {}});
 
-  const Ranks ranks = rank_vertices(mesh4, axis, value);
-  const auto owners = in_plane_owners(mesh4, ranks, axis, value);
-  VertexMaker maker{mesh4, ranks, out, axis, value, {}};
+  const std::vector<double> at = axis_coordinates(mesh4, axis, value);
+  const Ranks ranks = rank_vertices(mesh4, at, value);
+  const auto owners = in_plane_owners(mesh4, at, ranks, value);
+  VertexMaker maker{mesh4, at, ranks, out, axis, value, {}};
   std::vector<CellId> parent;
   for (std::size_t c = 0; c < mesh4.num_cells(); ++c) {
-    for (const Tet &t : cut_cell(mesh4, ranks, CellId(c), axis, value, owners)) {
+    for (const Tet &t : cut_cell(mesh4, at, ranks, CellId(c), value, owners)) {
       std::array<VertexId, 4> ids{kNoVertex, kNoVertex, kNoVertex, kNoVertex};
       for (int i = 0; i <= out.dim; ++i)
         ids[i] = maker.get(t[i]);

@@ -68,6 +68,35 @@ TEST_CASE("slice: sections of Kuhn hypercubes are conforming unit cubes on every
   }
 }
 
+TEST_CASE("slice: a hyperplane a rounding error or 1e-7 from a layer of vertices cuts through it",
+          "[slice][4d]") {
+  // Cut points a hair apart on one vertex's edges made degenerate tets (the
+  // fuzzer: a Kuhn hypercube at t = 1e-7; the sample cylinder at t = 0.5
+  // with vertices at 0.49999999999999872). Within 1e-6 of the axis extent of
+  // a vertex's cells, the vertex counts as on the plane: the section is the
+  // one through the layer.
+  for (int k : {1, 2}) {
+    const Mesh m = generate_kuhn(4, k);
+    for (int axis = 0; axis < 4; ++axis)
+      for (double layer : {0.0, k == 2 ? 0.5 : 1.0})
+        for (double offset : {1e-7, -1e-7, 1e-15, -4e-16, 1e-12}) {
+          const double value = layer + offset;
+          if (value < 0 || value > 1)
+            continue;
+          INFO("k " << k << " axis " << axis << " value " << value);
+          const Mesh s = slice_mesh(m, axis, value);
+          require_unit_cube_section(s);
+          const Mesh at_layer = slice_mesh(m, axis, layer);
+          REQUIRE(s.cells == at_layer.cells);
+          REQUIRE(s.coords == at_layer.coords);
+        }
+  }
+  // Further off, the cut is where it was asked.
+  const Mesh s = slice_mesh(generate_kuhn(4, 1), 3, 1e-4);
+  require_unit_cube_section(s);
+  REQUIRE(s.cells != slice_mesh(generate_kuhn(4, 1), 3, 0.0).cells);
+}
+
 TEST_CASE("slice: a hyperplane through interior facets produces each in-plane tet once",
           "[slice][4d]") {
   // At t = 0.5 with k = 2 whole tetrahedral facets lie in the plane; the
