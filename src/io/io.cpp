@@ -213,11 +213,14 @@ Mesh read_mesh(const std::string &path, StoredState &stored) {
 static Format format_named(const std::string &name, const std::string &format) {
   if (format.empty())
     return format_of(name);
-  if (format == "vtu")
-    return Format::Vtu;
-  if (format == "msh")
-    return Format::Msh;
-  throw InputError(name, "unknown format '" + format + "' (expected vtu or msh)");
+  if (format != "vtu" && format != "msh")
+    throw InputError(name, "unknown format '" + format + "' (expected vtu or msh)");
+  // A name that says .vtu or .msh is not written in the other format (no
+  // reader would take the file by its name).
+  const std::string ext = lower_extension(name);
+  if ((ext == ".vtu" || ext == ".msh") && ext != "." + format)
+    throw InputError(name, "the format " + format + " (--format) contradicts the name's " + ext);
+  return format == "vtu" ? Format::Vtu : Format::Msh;
 }
 
 namespace {

@@ -197,4 +197,8 @@ if ! "$BISECT" --help | grep -q mpirun; then
   one_line_naming "mpirun started 2 copies of a bisect built without MPI"
   [[ ! -e two-copies.vtu ]] || fail "two-copies.vtu written"
 fi
+# --format may not contradict the name's extension (a .vtu holding Gmsh data).
+expect_exit 1 "$BISECT" refine "$ROOT/data/ball.msh" --region "$ROOT/data/regions/hemisphere.json" -n 1 --format msh -o said-vtu.vtu
+one_line_naming "said-vtu.vtu: the format msh (--format) contradicts the name's .vtu"
+[[ ! -e said-vtu.vtu ]] || fail "said-vtu.vtu written"
 echo "outputs: ok"
