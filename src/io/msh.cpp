@@ -1824,8 +1824,7 @@ void write_elements(Output &out, const std::vector<SimplexSet> &sets,
           const VertexId *x = set.ids + c * nvs;
           const bool swap = flip && flip[c]; // cells only: at least 3 ids
           for (std::size_t k = 0; k < nvs; ++k)
-            store<std::uint64_t>(at + 8 * (k + 1),
-                                 std::uint64_t(x[swap && k < 2 ? 1 - k : k]) + 1);
+            store<std::uint64_t>(at + 8 * (k + 1), std::uint64_t(x[swap && k < 2 ? 1 - k : k]) + 1);
           at += record;
         }
       }
