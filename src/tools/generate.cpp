@@ -5,6 +5,7 @@
 // its main diagonal, one per permutation of the axes.
 #include "bisect/generate.hpp"
 
+#include "bisect/error.hpp"
 #include "bisect/measure.hpp"
 
 #include <algorithm>
@@ -20,8 +21,7 @@ namespace {
 
 void check_dimension(int dim) {
   if (dim < 2 || dim > 4)
-    throw std::invalid_argument("unsupported dimension " + std::to_string(dim) +
-                                " (expected 2, 3 or 4)");
+    throw UsageError("unsupported dimension " + std::to_string(dim) + " (expected 2, 3 or 4)");
 }
 
 // Unit-edge equilateral simplex built one vertex at a time: vertex k sits
@@ -95,7 +95,7 @@ Mesh generate_simplex(int dim, SimplexShape shape, std::uint64_t seed) {
   case SimplexShape::Random:
     return single_cell(dim, random_points(dim, seed));
   }
-  throw std::invalid_argument("unknown simplex shape");
+  throw UsageError("unknown simplex shape");
 }
 
 // Vertex (i_0, ..., i_{dim-1}) of the (k+1)^dim lattice has id
@@ -106,9 +106,9 @@ Mesh generate_simplex(int dim, SimplexShape shape, std::uint64_t seed) {
 Mesh generate_kuhn(int dim, int k, double lo, double hi) {
   check_dimension(dim);
   if (k < 1)
-    throw std::invalid_argument("kuhn: k must be at least 1");
+    throw UsageError("kuhn: k must be at least 1");
   if (!(hi > lo))
-    throw std::invalid_argument("kuhn: need lo < hi");
+    throw UsageError("kuhn: need lo < hi");
   Mesh mesh;
   mesh.dim = dim;
   const std::size_t side = std::size_t(k) + 1;
@@ -119,7 +119,8 @@ Mesh generate_kuhn(int dim, int k, double lo, double hi) {
   for (int d = 0; d < dim; ++d)
     stride[d] = d == 0 ? 1 : stride[d - 1] * side;
   if (nv > std::size_t(kNoVertex))
-    throw std::invalid_argument("kuhn: too many vertices");
+    throw UsageError("kuhn: " + std::to_string(nv) +
+                     " vertices, more than 32-bit ids allow (fewer --cells)");
 
   mesh.coords.resize(nv * dim);
   for (std::size_t v = 0; v < nv; ++v)

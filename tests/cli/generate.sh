@@ -41,4 +41,7 @@ one_line_naming "does not arise"
 expect_exit 1 "$BISECT" generate simplex --dim 2 --type P -o bad.vtu
 one_line_naming "--type"
 [[ ! -e bad.vtu ]] || fail "output left behind"
+# Too many vertices for 32-bit ids: a usage error (exit 1), not an internal one.
+expect_exit 1 "$BISECT" generate kuhn --dim 4 --cells 1000 -o too-many.vtu
+one_line_naming "more than 32-bit ids allow"
 echo "generate: ok"
