@@ -140,12 +140,22 @@ Mesh delaunay(int dim, std::vector<double> coords, double spacing) {
   return out;
 }
 
+// A 4D .vtu keeps the time coordinate as the point array t: an input point
+// array of that name would be taken for it.
+static void check_no_t_array(const Mesh &mesh) {
+  for (const DataArray &a : mesh.point_data)
+    if (a.name == "t")
+      throw InputError("", "extrude: point array 't' would be taken for the 4D result's time "
+                           "coordinate (kept as the point array t): rename it");
+}
+
 Mesh extrude_delaunay(const Mesh &mesh3, const std::vector<double> &slices, bool fill_hull) {
   if (mesh3.dim != 3)
     throw InputError("", "extrude: the input mesh must be 3D");
   if (mesh3.num_cells() == 0)
     throw InputError("", "extrude: the input mesh has no cells");
   check_slices(slices);
+  check_no_t_array(mesh3);
   const std::size_t nv = mesh3.num_vertices(), ns = slices.size();
   std::vector<double> coords;
   coords.reserve(4 * nv * ns);
@@ -203,6 +213,8 @@ Mesh extrude_coloured(const Mesh &mesh, const std::vector<std::uint8_t> &colour,
   if (mesh.num_cells() == 0)
     throw InputError("", "extrude: the input mesh has no cells");
   check_slices(slices);
+  if (m == 4)
+    check_no_t_array(mesh);
   if (std::string why = check_colouring(mesh, colour); !why.empty())
     throw InputError("", "the colouring is not proper: " + why);
   const std::size_t nv = mesh.num_vertices(), ns = slices.size(), nc = mesh.num_cells();

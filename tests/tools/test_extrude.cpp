@@ -87,6 +87,9 @@ TEST_CASE("Extrusion rejects bad slices, a 2D mesh and a non-convex domain", "[e
   REQUIRE_THROWS_AS(extrude_delaunay(m3, {0.0, 0.0}), InputError);
   REQUIRE_THROWS_AS(extrude_delaunay(generate_kuhn(2, 1), {0.0, 1.0}), InputError);
   REQUIRE_THROWS_WITH(extrude_delaunay(l_shaped(), {0.0, 1.0}), Catch::Contains("not convex"));
+  // A point array named t would be taken for the result's time coordinate.
+  m3.point_data.push_back({"t", 1, std::vector<double>(m3.num_vertices(), 0.5)});
+  REQUIRE_THROWS_WITH(extrude_delaunay(m3, {0.0, 1.0}), Catch::Contains("point array 't'"));
 }
 
 TEST_CASE("Local refinement of an extruded Kuhn cube stays conforming", "[extrude][4d]") {
