@@ -538,11 +538,57 @@ void write_values(Writer &w, VtuCompression compression, int level, const std::s
   put(double{});
 }
 
-// Writes `a` in its type (ValueType); Unknown: Int32 when every value is a
-// 32-bit integer and `guess_int` (cell arrays), else Float64.
+// The type `values` are written in: `t`, unless an integer type cannot hold
+// them all (values made by a tool: a sum of Int8 counts past 127, the mean
+// of two labels), then the first wider one that can: Int32, Int64, else
+// Float64. A static_cast wrapped them (127 + 1 written as -128).
+ValueType holding(ValueType t, const std::vector<double> &values) {
+  if (!is_integer_type(t) || values.empty())
+    return t;
+  double lo = values[0], hi = values[0];
+  bool whole = true;
+  for (double v : values) {
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+    whole &= v == std::trunc(v);
+  }
+  if (!whole || !std::isfinite(lo) || !std::isfinite(hi))
+    return ValueType::Float64;
+  auto fits = [&](ValueType u) {
+    switch (u) {
+    case ValueType::Int8:
+      return lo >= -128 && hi <= 127;
+    case ValueType::UInt8:
+      return lo >= 0 && hi <= 255;
+    case ValueType::Int16:
+      return lo >= -32768 && hi <= 32767;
+    case ValueType::UInt16:
+      return lo >= 0 && hi <= 65535;
+    case ValueType::Int32:
+      return lo >= -2147483648.0 && hi <= 2147483647.0;
+    case ValueType::UInt32:
+      return lo >= 0 && hi <= 4294967295.0;
+    case ValueType::Int64:
+      return lo >= -9223372036854775808.0 && hi < 9223372036854775808.0;
+    case ValueType::UInt64:
+      return lo >= 0 && hi < 18446744073709551616.0;
+    default:
+      return false;
+    }
+  };
+  for (ValueType u : {t, ValueType::Int32, ValueType::Int64})
+    if (fits(u))
+      return u;
+  return ValueType::Float64;
+}
+
+// Writes `a` in its type (ValueType, widened where it cannot hold a value:
+// holding()); Unknown: Int32 when every value is a 32-bit integer and
+// `guess_int` (cell arrays), else Float64.
 void write_typed(Writer &w, VtuCompression compression, int level, const DataArray &a,
                  bool guess_int) {
-  write_values(w, compression, level, a.name, a.components, a.values.size(), a.type,
+  write_values(w, compression, level, a.name, a.components, a.values.size(),
+               holding(a.type, a.values),
                guess_int && a.type == ValueType::Unknown && fits_int32(a.values),
                Bulk{[&](std::size_t first, std::size_t n, auto *out) {
                  using T = std::remove_pointer_t<decltype(out)>;
@@ -601,7 +647,10 @@ void write_cell_arrays_with_entities(Writer &w, VtuCompression compression, int 
     for (const Entities &b : mesh.entities)
       add(same_array(b.data, *f), b.size());
     // NaN padding must not be guessed as Int32.
-    const ValueType type = f->type == ValueType::Unknown && !integer ? ValueType::Float64 : f->type;
+    ValueType type = f->type == ValueType::Unknown && !integer ? ValueType::Float64 : f->type;
+    for (const Segment &s : segments)
+      if (s.own)
+        type = holding(type, s.own->values);
     // Blocks are encoded by several threads: each block finds its segments
     // (a handful) by itself.
     write_values(w, compression, level, f->name, f->components, total, type,

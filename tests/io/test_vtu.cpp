@@ -221,6 +221,37 @@ TEST_CASE("vtu: 3D round trip preserves coordinates, cells and arrays exactly", 
   CHECK(back.stage.empty());
 }
 
+TEST_CASE("vtu: an integer array written in a type too narrow for its values is widened",
+          "[io][3d]") {
+  // A tool's values in a file's type: coarsen --sum of Int8 counts past 127
+  // (written as -56 and 44 before), the mean of two labels.
+  TempDir dir;
+  Mesh m = two_tets();
+  m.cell_data = {{"count", 1, {100, 300}, ValueType::Int8},
+                 {"big", 1, {1, 3e9}, ValueType::Int32},
+                 {"half", 1, {1, 1.5}, ValueType::UInt8},
+                 {"fits", 1, {-3, 127}, ValueType::Int8}};
+  write_mesh(dir.file("m.vtu"), m);
+  const Mesh back = read_mesh(dir.file("m.vtu"));
+  const std::pair<const char *, ValueType> want[] = {{"count", ValueType::Int32},
+                                                     {"big", ValueType::Int64},
+                                                     {"half", ValueType::Float64},
+                                                     {"fits", ValueType::Int8}};
+  auto named = [](const std::vector<DataArray> &arrays, const std::string &name) {
+    for (const DataArray &a : arrays)
+      if (a.name == name)
+        return &a;
+    return static_cast<const DataArray *>(nullptr);
+  };
+  for (const auto &[name, type] : want) {
+    INFO(name);
+    const DataArray *a = named(back.cell_data, name);
+    REQUIRE(a);
+    CHECK(a->type == type);
+    CHECK(a->values == named(m.cell_data, name)->values);
+  }
+}
+
 TEST_CASE("vtu: 2D mesh comes back 2D", "[io][2d]") {
   TempDir dir;
   Mesh m;
