@@ -1626,10 +1626,10 @@ struct EntityPlan {
   std::vector<Block> blocks;
   // The cells in file order: grouped by entity, entities in order of first
   // appearance, cells of one entity in mesh order (empty: one entity, the
-  // cells in mesh order). A cell's element tag is
-  // its index in the mesh plus one (readers that go by tags, Gmsh and ours,
-  // get the mesh's order back); $ElementData lists the cells in file order
-  // with those tags (meshio pairs data with elements by position).
+  // cells in mesh order). Element tags are file positions plus one, and
+  // $ElementData lists the cells in file order with those tags (meshio
+  // pairs data with elements by position and wants the tags 1, 2, ...):
+  // readers that go by tags, Gmsh and ours, get the cells in file order.
   std::vector<std::size_t> order;
 };
 
