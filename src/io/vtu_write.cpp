@@ -13,6 +13,7 @@
 #include "io/huffman_deflate.hpp"
 
 #include "bisect/output.hpp"
+#include "bisect/text.hpp"
 #include "bisect/threads.hpp"
 
 #include <libdeflate.h>
@@ -29,6 +30,8 @@
 #include <fcntl.h>
 #include <limits>
 #include <memory>
+#include <numeric>
+#include <set>
 #include <string>
 #include <sys/stat.h>
 #include <vector>
@@ -685,13 +688,37 @@ void write_cell_arrays_with_entities(Writer &w, VtuCompression compression, int 
 }
 
 // Physical names as field data in meshio's convention: an Int32 array named
-// after the group, holding (tag, dimension).
+// after the group, holding (tag, dimension). Gmsh lets groups of two
+// dimensions share a name (a 2D and a 3D "domain"), but VTK keeps one field
+// array of a name (and our reader refuses two): the group of the highest
+// dimension keeps the name (as in meshio's conversion, which keeps the
+// last of Gmsh's list), and the others are written as "domain (2D, tag 7)",
+// as is a group named SpatialDimension. A group listed twice is written once.
 void write_physical_names(Writer &w, VtuCompression compression, int level, const Mesh &mesh) {
-  for (const PhysicalName &n : mesh.physical_names)
-    write_array<std::int32_t>(
-        w, compression, level, n.name, 1, 2,
-        [&](std::size_t i) { return std::int32_t(i == 0 ? n.tag : n.dim); },
-        " NumberOfTuples=\"2\"");
+  const std::vector<PhysicalName> &all = mesh.physical_names;
+  std::vector<std::size_t> by_dim(all.size());
+  std::iota(by_dim.begin(), by_dim.end(), std::size_t(0));
+  std::stable_sort(by_dim.begin(), by_dim.end(),
+                   [&](std::size_t a, std::size_t b) { return all[a].dim > all[b].dim; });
+  std::set<std::string> taken{"SpatialDimension"};
+  std::set<std::pair<int, int>> groups;
+  std::vector<std::string> names(all.size()); // empty: not written
+  for (std::size_t i : by_dim) {
+    const PhysicalName &n = all[i];
+    if (!groups.insert({n.dim, n.tag}).second)
+      continue;
+    std::string name = n.name;
+    if (taken.count(name))
+      name += " (" + std::to_string(n.dim) + "D, tag " + std::to_string(n.tag) + ")";
+    if (taken.insert(name).second) // else only a name made to collide: no name
+      names[i] = std::move(name);
+  }
+  for (std::size_t i = 0; i < all.size(); ++i)
+    if (!names[i].empty())
+      write_array<std::int32_t>(
+          w, compression, level, names[i], 1, 2,
+          [&](std::size_t k) { return std::int32_t(k == 0 ? all[i].tag : all[i].dim); },
+          " NumberOfTuples=\"2\"");
 }
 
 } // namespace
@@ -707,6 +734,22 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
     entity_ids += b.vertices.size();
   }
   const std::size_t nc = ncells + nentities;
+  // A name that is not text (is_name_text) makes a file VTK reads no cells
+  // from: the readers refuse one, and a mesh built in memory is refused here.
+  auto check_name = [&](const std::string &name) {
+    if (!is_name_text(name))
+      throw InputError(path, "the name '" + shown_name(name) +
+                                 "' is not UTF-8 text without control characters: a .vtu "
+                                 "cannot hold it");
+  };
+  for (const auto *arrays : {&mesh.point_data, &mesh.cell_data})
+    for (const DataArray &a : *arrays)
+      check_name(a.name);
+  for (const Entities &b : mesh.entities)
+    for (const DataArray &a : b.data)
+      check_name(a.name);
+  for (const PhysicalName &n : mesh.physical_names)
+    check_name(n.name);
   Writer w(path);
   w.text("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
          "byte_order=\"LittleEndian\" header_type=\"UInt64\"");

@@ -12,7 +12,9 @@
 #include <string>
 
 extern "C" {
+#include <cstdlib>
 #include <libqhull_r/qhull_ra.h>
+#include <new>
 }
 
 namespace bisect {
@@ -51,11 +53,20 @@ double shortest_edge(const Mesh &m) {
 // (d+1)-tuples of vertex ids of the lower facets (outward normal pointing
 // down in the lift direction).
 std::vector<VertexId> lower_hull(std::vector<double> &lifted, int npoints, int d) {
+  // Qhull reports into a stream of ours, not onto stderr: its warnings (up
+  // to dozens of lines for a degenerate input, whose result the callers
+  // validate anyway) are dropped, and a failure's first line goes into the
+  // error's one line.
+  char *report = nullptr;
+  std::size_t report_size = 0;
+  std::FILE *err = open_memstream(&report, &report_size);
+  if (!err)
+    throw std::bad_alloc();
   qhT qh_storage;
   qhT *qh = &qh_storage;
-  qh_zero(qh, stderr);
+  qh_zero(qh, err);
   char options[] = "qhull Qt";
-  int code = qh_new_qhull(qh, d + 1, npoints, lifted.data(), False, options, nullptr, stderr);
+  int code = qh_new_qhull(qh, d + 1, npoints, lifted.data(), False, options, nullptr, err);
   std::vector<VertexId> cells;
   if (code == 0) {
     facetT *facet;
@@ -69,8 +80,26 @@ std::vector<VertexId> lower_hull(std::vector<double> &lifted, int npoints, int d
   qh_freeqhull(qh, !qh_ALL);
   int curlong = 0, totlong = 0;
   qh_memfreeshort(qh, &curlong, &totlong);
-  if (code != 0)
-    throw CheckError("delaunay: qhull failed with code " + std::to_string(code));
+  std::fclose(err);
+  std::string text(report ? report : "", report_size);
+  std::free(report);
+  if (code != 0) {
+    // Qhull's messages start "QH6154 qhull precision error: ...".
+    std::string first;
+    for (std::size_t at = 0; at < text.size() && first.empty();) {
+      std::size_t end = text.find('\n', at);
+      if (end == std::string::npos)
+        end = text.size();
+      std::string line = text.substr(at, end - at);
+      if (line.rfind("QH", 0) == 0)
+        first = line.substr(0, 200);
+      at = end + 1;
+    }
+    throw CheckError("delaunay: Qhull failed (code " + std::to_string(code) + ")" +
+                     (first.empty() ? std::string() : ": " + first) +
+                     " (degenerate or nearly degenerate points, e.g. a slab far thinner than "
+                     "the mesh)");
+  }
   return cells;
 }
 
@@ -215,6 +244,12 @@ Mesh extrude_coloured(const Mesh &mesh, const std::vector<std::uint8_t> &colour,
   check_slices(slices);
   if (m == 4)
     check_no_t_array(mesh);
+  // The result's point array "slice" (each point's slab) would make two
+  // arrays of one name, which no reader takes.
+  for (const DataArray &a : mesh.point_data)
+    if (a.name == "slice")
+      throw InputError("", "extrude: point array 'slice' would clash with the result's array of "
+                           "each point's slab index: rename it");
   if (std::string why = check_colouring(mesh, colour); !why.empty())
     throw InputError("", "the colouring is not proper: " + why);
   const std::size_t nv = mesh.num_vertices(), ns = slices.size(), nc = mesh.num_cells();

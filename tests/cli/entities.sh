@@ -189,5 +189,40 @@ expect_exit 0 "$BISECT" refine box-xdmf-named.msh --region corner-box.json -n 1 
 /usr/bin/python3 xdmf.py "$ROOT/data/box-tagged.msh" again-box-xdmf.vtu box-named-again.vtu ||
   fail "box: groups or names after refine -> XDMF -> refine"
 grep -q "physical name: walls" <("$BISECT" info box-named-again.vtu) || fail "box-named-again.vtu: names lost"
+# Gmsh lets a 2D and a 3D group share a name; a .vtu cannot hold two field
+# arrays of one name (VTK keeps one, our reader refuses two), so the 2D one
+# is written under a longer name, and VTK, meshio and bisect read the file.
+command -v gmsh >/dev/null || fail "entities: gmsh is not installed (scripts/install-deps.sh installs it)"
+cat >dup.geo <<'GEO'
+SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 1, 1, 1};
+Physical Volume("domain") = {1};
+Physical Surface("domain") = {1, 2};
+Physical Surface("wall") = {3};
+Mesh.MeshSizeMax = 0.5;
+GEO
+gmsh dup.geo -3 -format msh41 -o dup.msh >gmsh.log 2>&1 || fail "gmsh dup.geo: $(tail -1 gmsh.log)"
+expect_exit 0 "$BISECT" refine dup.msh --region corner-box.json -n 1 -o dup.vtu -q --quality-csv none
+expect_exit 0 "$BISECT" info dup.vtu
+grep -q "physical name: domain (2D, tag" "$WORK/out" || fail "dup.vtu: info shows no renamed 2D group"
+expect_exit 0 "$BISECT" refine dup.vtu --region corner-box.json -n 1 -o dup2.msh -q --quality-csv none
+cat >dup.py <<'PY'
+import meshio
+import vtk
+
+r = vtk.vtkXMLUnstructuredGridReader()
+r.SetFileName("dup.vtu")
+r.Update()
+g = r.GetOutput()
+fd = g.GetFieldData()
+names = sorted(fd.GetArrayName(i) for i in range(fd.GetNumberOfArrays()))
+assert g.GetNumberOfCells() > 0, "VTK read no cells"
+assert names == ["domain", "domain (2D, tag 2)", "wall"], names
+m = meshio.read("dup.vtu")
+assert {k: list(v) for k, v in m.field_data.items()} == {
+    "domain": [1, 3], "domain (2D, tag 2)": [2, 2], "wall": [3, 2]}, m.field_data
+assert sorted(meshio.read("dup2.msh").field_data) == ["domain", "domain (2D, tag 2)", "wall"]
+PY
+/usr/bin/python3 dup.py || fail "a 2D and a 3D group of one name: VTK or meshio reads dup.vtu wrongly"
 echo "entities: box and square groups kept through refine, coarsen, meshio's XDMF and Gmsh 2.2;"
 echo "entities: refine -> XDMF -> refine keeps the groups by tag, and the names with the README's workaround"

@@ -27,4 +27,26 @@ expect_exit 0 "$BISECT" check oct.vtu
 expect_exit 0 "$BISECT" refine oct.vtu --region "$ROOT/data/regions/hypersphere.json" -n 5 -o oct5.vtu --quiet --slices 0,0.5,1
 expect_exit 0 "$BISECT" check oct5.vtu --against oct.vtu
 for t in 0 0.5 1; do expect_exit 0 "$BISECT" check oct5.t$t.vtu; done
+# A slab far thinner than the mesh: Qhull's own report (dozens of lines) is
+# not printed; the run ends on one line, nothing written (exit 2: the
+# triangulation fails the validation every result gets).
+"$BISECT" generate kuhn --dim 3 --cells 2 -o k3.vtu -q
+set +e
+"$BISECT" extrude k3.vtu --slices 0,1e-6 -o thin.vtu >"$WORK/out" 2>"$WORK/err"
+rc=$?
+set -e
+[[ $rc == 2 || $rc == 1 ]] || { cat "$WORK/err" >&2; fail "thin slab: exit $rc"; }
+one_line_naming "thin.vtu"
+[[ ! -e thin.vtu ]] || fail "thin slab: output left behind"
+# The colouring extrusion writes each point's slab as the point array slice:
+# an input array of that name is refused rather than written twice.
+/usr/bin/python3 - <<'PY'
+import meshio
+m = meshio.read("k3.vtu")
+m.point_data["slice"] = m.points[:, 0]
+meshio.write("k3-slice.vtu", m)
+PY
+expect_exit 1 "$BISECT" extrude k3-slice.vtu --method colouring --slices 0,1 -o sl.vtu
+one_line_naming "point array 'slice'"
+[[ ! -e sl.vtu ]] || fail "slice clash: output left behind"
 echo "extrude_4d: ok"

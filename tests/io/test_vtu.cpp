@@ -8,6 +8,7 @@
 #include "bisect/refine.hpp"
 #include "bisect/region.hpp"
 #include "bisect/state.hpp"
+#include "bisect/text.hpp"
 #include "bisect/threads.hpp"
 #include "support.hpp"
 
@@ -519,6 +520,63 @@ TEST_CASE("vtu: array with the wrong tuple count is rejected naming it", "[io][3
   f.point_data = ascii_array("Float64", "short_array", 1, "1 2 3");
   write_text(dir.file("short.vtu"), f.text());
   require_clean_read_error(dir.file("short.vtu"), "short_array");
+}
+
+TEST_CASE("vtu: a name that is not UTF-8 text is refused, reading and writing", "[io][3d]") {
+  // VTK reads no cells from a .vtu with such a name: no run may write one.
+  TempDir dir;
+  AsciiVtu f;
+  f.num_points = 4;
+  f.points = "0 0 0  1 0 0  0 1 0  0 0 1";
+  f.num_cells = 1;
+  f.connectivity = "0 1 2 3";
+  f.offsets = "4";
+  f.types = "10";
+  f.point_data = ascii_array("Float64", "caf\xE9", 1, "1 2 3 4"); // Latin-1, not UTF-8
+  write_text(dir.file("latin1.vtu"), f.text());
+  require_clean_read_error(dir.file("latin1.vtu"), "caf\\xE9");
+  f.point_data = ascii_array("Float64", "a&#1;b", 1, "1 2 3 4"); // a control character
+  write_text(dir.file("control.vtu"), f.text());
+  require_clean_read_error(dir.file("control.vtu"), "a\\x01b");
+  // Well-formed UTF-8 is kept as it is.
+  f.point_data = ascii_array("Float64", "caf\xC3\xA9 \xE2\x82\xAC \xF0\x9F\x98\x80", 1, "1 2 3 4");
+  write_text(dir.file("utf8.vtu"), f.text());
+  REQUIRE(read_mesh(dir.file("utf8.vtu")).point_data.at(0).name ==
+          "caf\xC3\xA9 \xE2\x82\xAC \xF0\x9F\x98\x80");
+  for (const char *bad :
+       {"\xC0\xAF", "\xED\xA0\x80", "\xF4\x90\x80\x80", "\xEF\xBF\xBF", "\xE2\x82", "tab\there"}) {
+    CHECK_FALSE(is_name_text(bad));
+    Mesh m = two_tets();
+    m.cell_data[0].name = bad;
+    REQUIRE_THROWS_WITH(write_mesh(dir.file("bad.vtu"), m), Catch::Contains("not UTF-8 text"));
+    m = two_tets();
+    m.physical_names.push_back({3, 1, bad});
+    REQUIRE_THROWS_WITH(write_mesh(dir.file("bad.vtu"), m), Catch::Contains("not UTF-8 text"));
+  }
+  CHECK(is_name_text(""));
+  CHECK(is_name_text("\xF4\x8F\xBF\xBF"));
+}
+
+TEST_CASE("vtu: physical groups of two dimensions sharing a name keep both, under two names",
+          "[io][3d]") {
+  // Gmsh allows a 2D and a 3D "domain"; VTK keeps one field array of a name.
+  TempDir dir;
+  Mesh m = two_tets();
+  m.physical_names = {{2, 2, "domain"},
+                      {3, 1, "domain"},
+                      {2, 3, "wall"},
+                      {2, 3, "wall"},
+                      {3, 4, "SpatialDimension"}};
+  write_mesh(dir.file("m.vtu"), m);
+  const Mesh back = read_mesh(dir.file("m.vtu"));
+  REQUIRE(back.physical_names.size() == 4);
+  // The highest dimension keeps the name, as in meshio's conversion.
+  CHECK(back.physical_names[0].name == "domain (2D, tag 2)");
+  CHECK((back.physical_names[0].dim == 2 && back.physical_names[0].tag == 2));
+  CHECK(back.physical_names[1].name == "domain");
+  CHECK((back.physical_names[1].dim == 3 && back.physical_names[1].tag == 1));
+  CHECK(back.physical_names[2].name == "wall");
+  CHECK(back.physical_names[3].name == "SpatialDimension (3D, tag 4)");
 }
 
 TEST_CASE("vtu: broken zlib stream gives one clean error", "[io]") {

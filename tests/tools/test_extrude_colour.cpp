@@ -290,6 +290,11 @@ TEST_CASE("extrusion by colour rejects an improper colouring, bad slices and 4D 
   REQUIRE_THROWS_WITH(extrude_coloured(m, bad, {0, 1}), Catch::Contains("not proper"));
   REQUIRE_THROWS_AS(extrude_coloured(m, c.colour, {0}), InputError);
   REQUIRE_THROWS_AS(extrude_coloured(m, c.colour, {1, 0}), InputError);
+  // The result's point array "slice" would be written twice.
+  Mesh with_slice = m;
+  with_slice.point_data.push_back({"slice", 1, std::vector<double>(m.num_vertices(), 1.0)});
+  REQUIRE_THROWS_WITH(extrude_coloured(with_slice, c.colour, {0, 1}),
+                      Catch::Contains("point array 'slice'"));
   Mesh m4 = generate_kuhn(4, 1);
   REQUIRE_THROWS_WITH(extrude_coloured(m4, std::vector<std::uint8_t>(m4.num_vertices(), 0), {0, 1}),
                       Catch::Contains("2D or 3D"));
