@@ -1725,15 +1725,27 @@ void write_entities(Output &out, const EntityPlan *const plans[4]) {
   for (int d = 0; d < 4; ++d) {
     if (!plans[d])
       continue;
-    for (const Entity &e : plans[d]->entities) {
+    // Where some entities of a dimension have a physical tag and others
+    // none (gmsh:physical 0), those get the tag 0 written: meshio reads
+    // gmsh:physical only for blocks whose entity lists a tag, and refuses a
+    // file where some blocks have it and others not. Our reader and Gmsh
+    // read 0 back (Gmsh as a group 0).
+    const auto &all = plans[d]->entities;
+    const bool some =
+        std::any_of(all.begin(), all.end(), [](const Entity &e) { return e.physical != 0; });
+    const bool every = some && std::all_of(all.begin(), all.end(),
+                                           [](const Entity &e) { return e.physical != 0; });
+    const bool write_zero = some && !every;
+    for (const Entity &e : all) {
       out.int32(e.tag);
       for (double x : e.lo)
         out.raw<double>(x);
       if (d > 0)
         for (double x : e.hi)
           out.raw<double>(x);
-      out.size(e.physical != 0 ? 1 : 0);
-      if (e.physical != 0)
+      const bool tagged = e.physical != 0 || write_zero;
+      out.size(tagged ? 1 : 0);
+      if (tagged)
         out.int32(e.physical);
       if (d > 0)
         out.size(0); // no bounding entities

@@ -224,5 +224,32 @@ assert {k: list(v) for k, v in m.field_data.items()} == {
 assert sorted(meshio.read("dup2.msh").field_data) == ["domain", "domain (2D, tag 2)", "wall"]
 PY
 /usr/bin/python3 dup.py || fail "a 2D and a 3D group of one name: VTK or meshio reads dup.vtu wrongly"
+# Cells with gmsh:physical 0 (no group) beside cells of a group: the .msh
+# writes the tag 0 for their entity, since meshio refuses a file where some
+# blocks have gmsh:physical and others not.
+cat >zero.py <<'PY'
+import sys
+import meshio
+import numpy as np
+
+if sys.argv[1] == "make":
+    m = meshio.read(sys.argv[2])
+    tets = [c for c in m.cells if c.type == "tetra"][0]
+    n = len(tets.data)
+    phys = np.ones(n, dtype=np.int32)
+    phys[: n // 2] = 0
+    meshio.write("zero.vtu", meshio.Mesh(m.points, [tets], cell_data={
+        "gmsh:physical": [phys], "gmsh:geometrical": [np.ones(n, dtype=np.int32)]}))
+else:
+    m = meshio.read("zero.msh")
+    tags = sorted(int(t) for a in m.cell_data["gmsh:physical"] for t in np.unique(a))
+    assert tags == [0, 1], tags
+    assert sum(len(c.data) for c in m.cells if c.type == "tetra") == int(sys.argv[2])
+PY
+/usr/bin/python3 zero.py make "$ROOT/data/ball.msh" || fail "gmsh:physical 0: making the input"
+expect_exit 0 "$BISECT" refine zero.vtu --region corner-box.json -n 1 -o zero.msh -q --quality-csv none
+expect_exit 0 "$BISECT" check zero.msh --against zero.vtu
+cells=$("$BISECT" info zero.msh | sed -n 's/^cells: //p')
+/usr/bin/python3 zero.py check "$cells" || fail "gmsh:physical 0 beside a group: meshio does not read zero.msh"
 echo "entities: box and square groups kept through refine, coarsen, meshio's XDMF and Gmsh 2.2;"
 echo "entities: refine -> XDMF -> refine keeps the groups by tag, and the names with the README's workaround"
