@@ -47,6 +47,12 @@ int run_info(const InfoArgs &a) {
       arrays.push_back({{"name", d.name}, {"on", "cells"}, {"components", d.components}});
     for (const DataArray &d : mesh.point_data)
       arrays.push_back({{"name", d.name}, {"on", "points"}, {"components", d.components}});
+    // What the text's "tagged entities" and "physical name" lines show.
+    nlohmann::json entities = nlohmann::json::array(), names = nlohmann::json::array();
+    for (const Entities &b : mesh.entities)
+      entities.push_back({{"dim", b.dim}, {"count", b.size()}});
+    for (const PhysicalName &n : mesh.physical_names)
+      names.push_back({{"dim", n.dim}, {"tag", n.tag}, {"name", n.name}});
     print_json(
         {{"file", path},
          {"dim", mesh.dim},
@@ -62,7 +68,9 @@ int run_info(const InfoArgs &a) {
          {"mean_quality", q.mean},
          {"bisection_state", has_state},
          {"marking", has_state ? nlohmann::json(marking_name(mesh.marking)) : nlohmann::json()},
-         {"arrays", arrays}});
+         {"arrays", arrays},
+         {"entities", entities},
+         {"physical_names", names}});
     return kExitOk;
   }
   std::cout << "file: " << path << "\n"

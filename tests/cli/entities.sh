@@ -21,6 +21,23 @@ for mesh in box square; do
   in=$ROOT/data/$mesh-tagged.msh
   expect_exit 0 "$BISECT" info "$in"
   grep -q "physical name: left" "$WORK/out" || fail "$mesh: info shows no physical names"
+  cp "$WORK/out" info-$mesh.txt
+  # --json has the text's tagged entities and physical names (and its other keys).
+  expect_exit 0 "$BISECT" info "$in" --json
+  /usr/bin/python3 - info-$mesh.txt "$WORK/out" <<'PY' || fail "$mesh: info --json and the text disagree"
+import json, re, sys
+text, j = open(sys.argv[1]).read(), json.load(open(sys.argv[2]))
+ents = [{"dim": int(d), "count": int(n)} for n, d in
+        re.findall(r"^tagged entities: (\d+) of dimension (\d+)$", text, re.M)]
+names = [{"dim": int(d), "tag": int(t), "name": n} for n, d, t in
+         re.findall(r"^physical name: (.*) \(dimension (\d+), tag (\d+)\)$", text, re.M)]
+assert ents and names, (ents, names)
+assert j["entities"] == ents, (j.get("entities"), ents)
+assert j["physical_names"] == names, (j.get("physical_names"), names)
+assert "left" in [n["name"] for n in j["physical_names"]]
+for key in ("file", "dim", "cells", "vertices", "bounding_box", "volume", "arrays", "marking"):
+    assert key in j, key
+PY
   for ext in vtu msh; do
     expect_exit 0 "$BISECT" refine "$in" --region corner-$mesh.json -n 3 -o "$mesh.$ext" -q --check --quality-csv none
   done
