@@ -126,8 +126,12 @@ int run_coarsen(const CoarsenArgs &a) {
     add_origin_array(mesh);
     options.min_arrays.push_back(kOriginArray);
   }
-  const auto on_pass = coarsen_pass_printer(a.passes, quiet);
-  const CoarsenResult result = coarsen(mesh, marks, options, on_pass);
+  const auto print_pass = coarsen_pass_printer(a.passes, quiet);
+  int passes_run = 0; // one "pass" line each, the last one perhaps removing nothing
+  const CoarsenResult result = coarsen(mesh, marks, options, [&](const CoarsenPass &p) {
+    ++passes_run;
+    print_pass(p);
+  });
 
   // The coarsened mesh covers the input's domain exactly and conforms.
   const CheckResult check = a.check ? check_conformity(mesh, &before) : check_refined(mesh, before);
@@ -146,7 +150,8 @@ int run_coarsen(const CoarsenArgs &a) {
     j["input"] = a.input;
     j["output"] = out;
     j["dim"] = mesh.dim;
-    j["passes"] = result.passes;
+    j["passes"] = result.passes;  // passes that removed something
+    j["passes_run"] = passes_run; // and the one that found nothing left, if it ran
     j["initial_cells"] = cells0;
     j["initial_vertices"] = verts0;
     j["cells"] = mesh.num_cells();
@@ -171,10 +176,13 @@ std::function<void(const CoarsenPass &)> coarsen_pass_printer(int passes, bool q
   return [=](const CoarsenPass &p) {
     if (!quiet) {
       char buf[256];
-      std::snprintf(buf, sizeof buf, "pass %d%s: %s cells, %s %s removed, %.2f s\n", p.pass,
+      // A pass that removes nothing ends the run: it does not count in
+      // --json's "passes" (passes that removed something), so it says so.
+      std::snprintf(buf, sizeof buf, "pass %d%s: %s cells, %s %s removed, %.2f s%s\n", p.pass,
                     passes ? ("/" + std::to_string(passes)).c_str() : "",
                     with_commas(p.cells).c_str(), with_commas(p.removed_vertices).c_str(),
-                    p.removed_vertices == 1 ? "vertex" : "vertices", seconds_since(*t_pass));
+                    p.removed_vertices == 1 ? "vertex" : "vertices", seconds_since(*t_pass),
+                    p.removed_vertices == 0 ? " (nothing left to remove: stopping)" : "");
       std::cerr << buf;
     }
     *t_pass = std::chrono::steady_clock::now();

@@ -87,6 +87,16 @@ expect_exit 1 "$BISECT" coarsen square-index.vtu --all -n 2
 one_line_naming "square-index.coarsened.vtu"
 expect_exit 0 "$BISECT" coarsen square-index.vtu --all -n 2 -f -q
 [[ ! -s "$WORK/err" ]] || fail "-q printed something"
+# -n 0 runs passes until one removes nothing: square-index.vtu was refined 4
+# times, so 5 pass lines, the last saying it removed nothing; --json's
+# "passes" counts the 4 that removed something, "passes_run" all 5.
+expect_exit 0 "$BISECT" coarsen square-index.vtu --all -n 0 -o all0.vtu --json
+cp "$WORK/out" all0.json
+[[ $(grep -c '^pass [0-9]*: ' "$WORK/err") == 5 ]] || { cat "$WORK/err"; fail "-n 0: pass lines"; }
+grep -q '^pass 5: .* 0 vertices removed, .*nothing left to remove' "$WORK/err" ||
+  { cat "$WORK/err"; fail "-n 0: the last pass does not say it removed nothing"; }
+[[ $(json_field all0.json passes) == 4 ]] || fail "-n 0: passes is not 4: $(cat all0.json)"
+[[ $(json_field all0.json passes_run) == 5 ]] || fail "-n 0: passes_run is not 5: $(cat all0.json)"
 
 # A region: only cells touching it, and the result passes bisect check.
 printf '%s\n' '{"type": "box", "min": [0, 0], "max": [0.5, 0.5]}' >box.json

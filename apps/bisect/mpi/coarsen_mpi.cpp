@@ -120,9 +120,10 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
     if (a.origin)
       options.min_arrays.push_back(kOriginArray);
     const auto print_pass = coarsen_pass_printer(a.passes, quiet);
-    int rounds = 0;
+    int rounds = 0, passes_run = 0; // (on rank 0, which sees the passes)
     std::size_t moved = 0;
     const auto on_pass = [&](const CoarsenPass &pass) {
+      ++passes_run;
       rounds += pass.rounds;
       moved += pass.moved_cells;
       if (print_pass)
@@ -196,7 +197,8 @@ int run_coarsen_mpi(const DistributedCoarsenArgs &a) {
       j["dim"] = dim;
       j["ranks"] = d.size;
       j["pieces_read_in_parallel"] = parallel != 0;
-      j["passes"] = result.passes;
+      j["passes"] = result.passes;  // passes that removed something
+      j["passes_run"] = passes_run; // and the one that found nothing left, if it ran
       j["initial_cells"] = cells0;
       j["initial_vertices"] = verts0;
       j["cells"] = d.global_cells;
