@@ -163,7 +163,7 @@ std::string slice_path(const std::string &output, const char *axis, double value
 
 // Writes the section of `mesh` at coordinate `axis` = `value` into output
 // `h`; returns the line to print once the outputs are committed.
-std::string write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h) {
+SliceWritten write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h) {
   Mesh s = slice_mesh(mesh, axis, value);
   // The 4D bisection state means nothing on a 3D section.
   std::erase_if(s.cell_data, [](const DataArray &d) { return d.name.rfind("bisect:", 0) == 0; });
@@ -178,7 +178,7 @@ std::string write_slice(const Mesh &mesh, int axis, double value, OutputSet &out
   line << "bisect: wrote " << outputs.name(h) << " (" << with_commas(s.num_cells())
        << (s.dim == 3 ? " tetrahedra" : " triangles") << ": the section "
        << (axis == mesh.dim - 1 ? 't' : "xyz"[axis]) << " = " << value << ")\n";
-  return line.str();
+  return {line.str(), s.dim, s.num_cells(), s.num_vertices()};
 }
 
 // "0,0.5,1" or "start:stop:count" (count slabs, count + 1 slices).

@@ -88,10 +88,17 @@ void add_format_option(CLI::App *cmd, std::string &format);
 // "<output stem>.<axis><value>.vtu" beside the output.
 std::string slice_path(const std::string &output, const char *axis, double value);
 
+// A section write_slice() wrote: the line to print once the outputs are
+// committed, and the section's size.
+struct SliceWritten {
+  std::string line;
+  int dim = 0;
+  std::size_t cells = 0, vertices = 0;
+};
+
 // Writes the section of `mesh` at coordinate `axis` = `value` into output
-// `h`; returns the line to print once the outputs are committed. An empty
-// section is an InputError naming the output.
-std::string write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h);
+// `h`. An empty section is an InputError naming the output.
+SliceWritten write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h);
 
 // "0,0.5,1" or "start:stop:count" (count slabs, count + 1 slices).
 std::vector<double> parse_slices(const std::string &text);

@@ -278,7 +278,7 @@ int run_refine(const RefineArgs &a) {
   write_output_mesh(outputs, h_mesh, mesh, write_options);
   std::string slice_lines;
   for (std::size_t i = 0; i < a.slices.size(); ++i)
-    slice_lines += write_slice(mesh, mesh.dim - 1, a.slices[i], outputs, h_slices[i]);
+    slice_lines += write_slice(mesh, mesh.dim - 1, a.slices[i], outputs, h_slices[i]).line;
   outputs.commit();
   stages.write = seconds_since(t_write);
   if (!quiet)

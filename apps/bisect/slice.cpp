@@ -28,12 +28,18 @@ int run_slice(const SliceArgs &a) {
   const int axis = a.axis == "t" ? mesh.dim - 1 : int(std::string("xyz").find(a.axis[0]));
   if (axis >= mesh.dim)
     throw UsageError("slice: a 3D mesh has no axis " + a.axis);
-  const std::string line = write_slice(mesh, axis, a.value, outputs, h);
+  const SliceWritten s = write_slice(mesh, axis, a.value, outputs, h);
   outputs.commit();
   if (a.flags.json)
-    print_json({{"input", a.input}, {"output", a.output}, {"axis", a.axis}, {"value", a.value}});
+    print_json({{"input", a.input},
+                {"output", a.output},
+                {"axis", a.axis},
+                {"value", a.value},
+                {"dim", s.dim},
+                {"cells", s.cells},
+                {"vertices", s.vertices}});
   if (!a.flags.quiet)
-    std::cerr << line;
+    std::cerr << s.line;
   return kExitOk;
 }
 

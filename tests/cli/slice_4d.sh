@@ -27,6 +27,18 @@ grep -q "^dimension: 2$" "$WORK/out" || fail "slice of a 3D mesh is not 2D"
 grep -q "^volume: 1$" "$WORK/out" || fail "slice of the unit cube is not the unit square"
 expect_exit 0 "$BISECT" refine k3.vtu --region "$ROOT/data/regions/sphere.json" -n 3 -o k3r.vtu --slices 0,0.5,1 --quiet
 for t in 0 0.5 1; do expect_exit 0 "$BISECT" check k3r.t$t.vtu; done
+# slice --json: the section's size, as info reads it back.
+expect_exit 0 "$BISECT" slice k3r.vtu --t 0.25 -o k3r-s.vtu --json -q
+cp "$WORK/out" k3r-s.json
+expect_exit 0 "$BISECT" info k3r-s.vtu --json
+cp "$WORK/out" k3r-s-info.json
+/usr/bin/python3 - <<'PY' || fail "slice --json: $(cat k3r-s.json)"
+import json
+s, i = json.load(open("k3r-s.json")), json.load(open("k3r-s-info.json"))
+assert s["cells"] > 0 and s["vertices"] > 0, s
+assert (s["dim"], s["cells"], s["vertices"]) == (i["dim"], i["cells"], i["vertices"]), (s, i)
+assert (s["axis"], s["value"], s["output"]) == ("t", 0.25, "k3r-s.vtu"), s
+PY
 expect_exit 1 "$BISECT" slice k3.vtu --axis t --value 0.5 -o /dev/null/x.vtu
 expect_exit 1 "$BISECT" refine "$ROOT/data/square.msh" --region "$ROOT/data/regions/circle.json" --slices 0.5 -o sq.vtu
 one_line_naming "square.msh"

@@ -405,7 +405,7 @@ int run_refine_mpi(const DistributedArgs &a) {
         write_output_mesh(*outputs, h_mesh, g, write_options);
         // Sections of the gathered mesh: the serial run's files.
         for (std::size_t i = 0; i < a.slices.size(); ++i)
-          slice_lines += write_slice(g, g.dim - 1, a.slices[i], *outputs, h_slices[i]);
+          slice_lines += write_slice(g, g.dim - 1, a.slices[i], *outputs, h_slices[i]).line;
       }
     }
     if (rank == 0)
