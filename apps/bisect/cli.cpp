@@ -182,7 +182,7 @@ SliceWritten write_slice(const Mesh &mesh, int axis, double value, OutputSet &ou
 }
 
 // "0,0.5,1" or "start:stop:count" (count slabs, count + 1 slices).
-std::vector<double> parse_slices(const std::string &text) {
+std::vector<double> parse_slices(const std::string &text, std::size_t at_least) {
   auto number = [&](const std::string &t) {
     std::size_t used = 0;
     double v = 0;
@@ -214,8 +214,11 @@ std::vector<double> parse_slices(const std::string &text) {
     for (std::string p; std::getline(in, p, ',');)
       out.push_back(number(p));
   }
-  if (out.size() < 2)
-    throw UsageError("--slices: need at least two slices");
+  if (out.size() < at_least)
+    throw UsageError(at_least == 1 ? std::string("--slices: need at least one slice")
+                     : at_least == 2
+                         ? std::string("--slices: need at least two slices")
+                         : "--slices: need at least " + std::to_string(at_least) + " slices");
   for (std::size_t i = 1; i < out.size(); ++i)
     if (!(out[i] > out[i - 1]))
       throw UsageError("--slices: values must increase");

@@ -100,8 +100,10 @@ struct SliceWritten {
 // `h`. An empty section is an InputError naming the output.
 SliceWritten write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h);
 
-// "0,0.5,1" or "start:stop:count" (count slabs, count + 1 slices).
-std::vector<double> parse_slices(const std::string &text);
+// --slices of extrude and refine: "0,0.5,1" or "start:stop:count" (count
+// slabs, count + 1 slices, both ends included); increasing values, at least
+// `at_least` of them (extrude needs two, refine one). A UsageError otherwise.
+std::vector<double> parse_slices(const std::string &text, std::size_t at_least = 2);
 
 // Writes a made mesh to `out` (an OutputSet of one; `inputs` may not be it)
 // and prints "wrote" unless quiet; with json, a summary on stdout.

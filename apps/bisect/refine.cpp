@@ -36,7 +36,8 @@ struct RefineArgs {
   double max_memory_gib = 0;
   bool force = false, check = false, origin = false;
   CommonFlags flags;
-  std::vector<double> slices; // t values (last coordinate): sections of the final mesh
+  std::optional<std::string> slices_text; // --slices as given (parse_slices)
+  std::vector<double> slices;             // t values (last coordinate): sections of the final mesh
 };
 
 std::string default_output(const std::string &input) {
@@ -53,8 +54,11 @@ struct StageSeconds {
   double read = 0, validate = 0, select = 0, refine = 0, quality = 0, final_check = 0, write = 0;
 };
 
-int run_refine(const RefineArgs &a) {
+int run_refine(RefineArgs &a) {
   const auto t_start = std::chrono::steady_clock::now();
+  // The same T0,T1,... or START:STOP:COUNT as extrude's, one slice allowed.
+  if (a.slices_text)
+    a.slices = parse_slices(*a.slices_text, 1);
   const bool quiet = a.flags.quiet;
   if (a.region.empty() && a.indicator.empty())
     throw UsageError("refine needs --region SPEC or --indicator NAME (or both)");
@@ -327,6 +331,8 @@ Command add_refine(CLI::App &app) {
   cmd->footer("Example: bisect refine data/ball.msh --region data/regions/hemisphere.json "
               "--iterations 10 -o ball-10.vtu\n"
               "         bisect refine mesh.vtu --indicator eta --dorfler 0.5 -o next.vtu\n"
+              "         bisect refine st.vtu --region r4.json -n 5 --slices 0:1:4 -o st5.vtu   "
+              "(and st5.t0.vtu, st5.t0.25.vtu, ..., st5.t1.vtu)\n"
               "Writes the mesh (.vtu or .msh by extension, with the bisection state as "
               "cell arrays bisect:*, so refining the output continues the same sequence) "
               "and a CSV with one row per iteration. A file's bisection state is checked on "
@@ -386,10 +392,11 @@ Command add_refine(CLI::App &app) {
                   "Stop (exit 3) before an iteration estimated to need more than this many "
                   "GiB (under mpirun: per rank); default: the memory available now")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--slices", a->slices,
-                  "Also write the sections t = T1,T2,... of the final mesh (t: the last "
-                  "coordinate; 4D -> 3D tets, 2D+t -> 2D triangles) as <output stem>.t<T>.vtu")
-      ->delimiter(',');
+  cmd->add_option("--slices", a->slices_text,
+                  "Also write the sections t = T of the final mesh (t: the last coordinate; 4D "
+                  "-> 3D tets, 2D+t -> 2D triangles) as <output stem>.t<T>.vtu: T1,T2,... "
+                  "(increasing; one is enough) or START:STOP:COUNT (COUNT + 1 sections from "
+                  "START to STOP, as extrude's)");
   add_common_flags(cmd, a->flags);
   cmd->add_flag("--force,-f", a->force, "Overwrite existing output files (never the input)");
   cmd->add_flag("--origin", a->origin,

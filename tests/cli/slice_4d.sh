@@ -39,6 +39,18 @@ assert s["cells"] > 0 and s["vertices"] > 0, s
 assert (s["dim"], s["cells"], s["vertices"]) == (i["dim"], i["cells"], i["vertices"]), (s, i)
 assert (s["axis"], s["value"], s["output"]) == ("t", 0.25, "k3r-s.vtu"), s
 PY
+# refine --slices takes extrude's START:STOP:COUNT too (COUNT + 1 sections).
+expect_exit 0 "$BISECT" refine k3.vtu --region "$ROOT/data/regions/sphere.json" -n 2 -o k3q.vtu --slices 0:1:4 --quiet
+for t in 0 0.25 0.5 0.75 1; do expect_exit 0 "$BISECT" check k3q.t$t.vtu; done
+[[ $(ls k3q.t*.vtu | wc -l) == 5 ]] || fail "--slices 0:1:4 wrote $(ls k3q.t*.vtu)"
+expect_exit 0 "$BISECT" refine k3.vtu --region "$ROOT/data/regions/sphere.json" -n 1 -o k3one.vtu --slices 0.5 --quiet
+[[ -f k3one.t0.5.vtu ]] || fail "--slices 0.5: no section written"
+for bad in 0:1 0:1:0 1,0.5 0.5,0.5 a,1; do
+  expect_exit 1 "$BISECT" refine k3.vtu --region "$ROOT/data/regions/sphere.json" -o bad.vtu --slices $bad
+  one_line_naming "--slices"
+  [[ ! -e bad.vtu ]] || fail "--slices $bad wrote an output"
+done
+
 expect_exit 1 "$BISECT" slice k3.vtu --axis t --value 0.5 -o /dev/null/x.vtu
 expect_exit 1 "$BISECT" refine "$ROOT/data/square.msh" --region "$ROOT/data/regions/circle.json" --slices 0.5 -o sq.vtu
 one_line_naming "square.msh"
