@@ -51,7 +51,11 @@ Command add_slice(CLI::App &app) {
       "slice", "Cut a 4D mesh by the hyperplane {axis = value} into a conforming 3D tetrahedral "
                "mesh for ParaView (prisms are split into three tetrahedra), or a 3D (2D+t) mesh "
                "by a plane into a conforming triangle mesh.");
-  cmd->footer("Example: bisect slice hypercube-25.vtu --t 0.5 -o section.vtu");
+  cmd->footer("Example: bisect slice hypercube-25.vtu --t 0.5 -o section.vtu\n"
+              "The cut coordinate is dropped, the others kept in order as x, y(, z): a 4D "
+              "mesh cut at t keeps (x, y, z), at --axis x gives (y, z, t) as (x, y, z); a 3D "
+              "mesh cut at t (its z) gives (x, y) in the plane z = VALUE, at --axis x gives "
+              "(y, z) as (x, y) in the plane z = 0.");
   cmd->add_option("input", a->input, "4D mesh (.vtu), or 3D mesh (- reads standard input)")
       ->required();
   auto *t_opt = cmd->add_option("--t", a->value, "Shorthand for --axis t --value VALUE");

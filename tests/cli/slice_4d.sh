@@ -51,6 +51,53 @@ for bad in 0:1 0:1:0 1,0.5 0.5,0.5 a,1; do
   [[ ! -e bad.vtu ]] || fail "--slices $bad wrote an output"
 done
 
+# Which coordinates a section has (README, bisect slice): a box of
+# extents 1 (x), 2 (y), 3 (z) and, extruded, 4 (t).
+/usr/bin/python3 - <<'PY' || fail "cannot make the box"
+import meshio
+m = meshio.read("k3.vtu")
+m.points[:, 1] *= 2
+m.points[:, 2] *= 3
+meshio.write("box3.vtu", meshio.Mesh(m.points, [("tetra", m.cells_dict["tetra"])]))
+PY
+expect_exit 0 "$BISECT" extrude box3.vtu --slices 0:4:2 -o box4.vtu -q
+# extent_is FILE X Y [Z]: the bounding box bisect info reads is [0, X] x [0, Y] (x [0, Z]).
+extent_is() {
+  local f=$1; shift
+  expect_exit 0 "$BISECT" info "$f" --json
+  /usr/bin/python3 - "$WORK/out" "$@" <<'PY' || fail "$f: bounding box is not [0, $*]: $(cat "$WORK/out")"
+import json, sys
+j = json.load(open(sys.argv[1]))
+want = [float(v) for v in sys.argv[2:]]
+assert j["dim"] == len(want), j["dim"]
+assert all(abs(a) < 1e-12 for a in j["bounding_box"]["min"]), j["bounding_box"]
+assert all(abs(a - b) < 1e-12 for a, b in zip(j["bounding_box"]["max"], want)), j["bounding_box"]
+PY
+}
+expect_exit 0 "$BISECT" slice box4.vtu --t 1 -o b4t.vtu -q
+extent_is b4t.vtu 1 2 3 # (x, y, z)
+expect_exit 0 "$BISECT" slice box4.vtu --axis x --value 0.5 -o b4x.vtu -q
+extent_is b4x.vtu 2 3 4 # (y, z, t) as x, y, z
+expect_exit 0 "$BISECT" slice box4.vtu --axis y --value 0.5 -o b4y.vtu -q
+extent_is b4y.vtu 1 3 4 # (x, z, t)
+expect_exit 0 "$BISECT" slice box4.vtu --axis z --value 0.5 -o b4z.vtu -q
+extent_is b4z.vtu 1 2 4 # (x, y, t)
+expect_exit 0 "$BISECT" slice box3.vtu --t 1.5 -o b3t.vtu -q
+extent_is b3t.vtu 1 2 # (x, y), written at z = 1.5
+expect_exit 0 "$BISECT" slice box3.vtu --axis z --value 1.5 -o b3z.vtu -q
+cmp -s b3t.vtu b3z.vtu || fail "a 3D mesh's --axis z is not its --t"
+expect_exit 0 "$BISECT" slice box3.vtu --axis x --value 0.5 -o b3x.vtu -q
+extent_is b3x.vtu 2 3 # (y, z) as x, y, written at z = 0
+expect_exit 0 "$BISECT" slice box3.vtu --axis y --value 0.5 -o b3y.vtu -q
+extent_is b3y.vtu 1 3 # (x, z) as x, y
+/usr/bin/python3 - <<'PY' || fail "the third coordinate of a 3D mesh's sections"
+import meshio
+for name, z in (("b3t.vtu", 1.5), ("b3x.vtu", 0.0), ("b3y.vtu", 0.0)):
+    p = meshio.read(name).points
+    assert p.shape[1] == 3 and abs(p[:, 2] - z).max() == 0, (name, p[:, 2].min(), p[:, 2].max())
+p = meshio.read("b4x.vtu").points
+assert abs(p.max(axis=0) - [2, 3, 4]).max() < 1e-12, p.max(axis=0)
+PY
 expect_exit 1 "$BISECT" slice k3.vtu --axis t --value 0.5 -o /dev/null/x.vtu
 expect_exit 1 "$BISECT" refine "$ROOT/data/square.msh" --region "$ROOT/data/regions/circle.json" --slices 0.5 -o sq.vtu
 one_line_naming "square.msh"
