@@ -61,12 +61,19 @@ Command add_slice(CLI::App &app) {
   auto *t_opt = cmd->add_option("--t", a->value, "Shorthand for --axis t --value VALUE");
   cmd->add_option("--axis", a->axis,
                   "x, y, z or t (default t: the last coordinate, z of a 3D mesh)")
-      ->check(CLI::IsMember({"x", "y", "z", "t"}));
-  cmd->add_option("--value", a->value, "Where the hyperplane cuts the axis")->excludes(t_opt);
+      ->check(CLI::IsMember({"x", "y", "z", "t"}))
+      ->excludes(t_opt);
+  auto *value_opt =
+      cmd->add_option("--value", a->value, "Where the hyperplane cuts the axis")->excludes(t_opt);
   cmd->add_option("--output,-o", a->output, "Output 3D mesh (.vtu or .msh)")->required();
   cmd->add_flag("--force,-f", a->force, "Overwrite an existing file");
   add_common_flags(cmd, a->flags);
-  return {cmd, [a] { return run_slice(*a); }};
+  return {cmd, [a, t_opt, value_opt] {
+            // No default cut: a forgotten value is not silently 0.
+            if (t_opt->count() == 0 && value_opt->count() == 0)
+              throw UsageError("slice: give where to cut: --t VALUE, or --axis AXIS --value VALUE");
+            return run_slice(*a);
+          }};
 }
 
 } // namespace bisect::cli

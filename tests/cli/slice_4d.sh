@@ -90,6 +90,14 @@ expect_exit 0 "$BISECT" slice box3.vtu --axis x --value 0.5 -o b3x.vtu -q
 extent_is b3x.vtu 2 3 # (y, z) as x, y, written at z = 0
 expect_exit 0 "$BISECT" slice box3.vtu --axis y --value 0.5 -o b3y.vtu -q
 extent_is b3y.vtu 1 3 # (x, z) as x, y
+# --t is --axis t --value: not with --axis, and a cut needs a value.
+expect_exit 1 "$BISECT" slice box4.vtu --t 0.5 --axis x -o mixed.vtu
+one_line_naming "--axis"
+expect_exit 1 "$BISECT" slice box4.vtu --axis x -o novalue.vtu
+one_line_naming "--value"
+expect_exit 1 "$BISECT" slice box4.vtu -o novalue.vtu
+one_line_naming "--t VALUE"
+[[ ! -e mixed.vtu && ! -e novalue.vtu ]] || fail "a refused slice wrote its output"
 /usr/bin/python3 - <<'PY' || fail "the third coordinate of a 3D mesh's sections"
 import meshio
 for name, z in (("b3t.vtu", 1.5), ("b3x.vtu", 0.0), ("b3y.vtu", 0.0)):
