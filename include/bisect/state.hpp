@@ -59,12 +59,18 @@ inline constexpr const char *kGlobalIdArray = "bisect:global_id";
 //   bisect:level (point) the refinement iteration that made the vertex, 0
 //     for an original vertex (optional: without it every made vertex is
 //     level 1, and one coarsening pass undoes as much as it can).
+//   bisect:parent_rank (point, explicit marking only) the rank of the
+//     vertex's parent edge in the explicit edge order, -1 for an original
+//     vertex or an edge without rank. No cell holds a split edge, so
+//     bisect:edge_rank cannot carry its rank, and coarsening needs it: the
+//     Stage 1 parents it rebuilds are bisected by the order again.
 // The deepest generation a file may give (see tree.cpp).
 inline constexpr int kMaxGeneration = 8192;
 inline constexpr const char *kGenerationArray = "bisect:generation";
 inline constexpr const char *kParentAArray = "bisect:parent_a";
 inline constexpr const char *kParentBArray = "bisect:parent_b";
 inline constexpr const char *kLevelArray = "bisect:level";
+inline constexpr const char *kParentRankArray = "bisect:parent_rank";
 
 // The tree in the pieces of a .pvtu (a piece may lack a vertex's parents,
 // so they are named by coordinates; read_pvtu turns these into the arrays
@@ -87,7 +93,11 @@ void encode_tree(Mesh &mesh);
 // naming `path` and the array: wrong component count, a value that is not an
 // integer in range, parent ids not both -1 or both smaller than the vertex
 // and distinct, or a vertex that is not the midpoint of its parent edge
-// (relative 1e-6 of the edge's extent). Returns whether the arrays were there.
+// (relative 1e-6 of the edge's extent). With explicit marking (mesh.marking
+// already decoded), the ranks bisect:parent_rank gives are added to
+// mesh.edge_rank (InputError: not an integer -1..2^32-2, a rank for an
+// original vertex, or an edge given two different ranks). Returns whether
+// the arrays were there.
 // `stored`: where the arrays are when not in the mesh's data (emptied).
 struct StoredState; // below
 bool decode_tree(Mesh &mesh, const std::string &path, StoredState *stored = nullptr);

@@ -219,7 +219,7 @@ Mesh read_pvtu(const std::string &path) {
   for (Mesh &m : pieces) {
     auto tree = [](const DataArray &a) {
       return a.name == kGenerationArray || a.name == kParentAArray || a.name == kParentBArray ||
-             a.name == kLevelArray;
+             a.name == kLevelArray || a.name == kParentRankArray;
     };
     std::erase_if(m.point_data, tree);
     std::erase_if(m.cell_data, tree);

@@ -168,8 +168,8 @@ void encode_state(Mesh &mesh) {
 }
 
 bool StateArrays::hides(const std::string &name) const {
-  for (const char *n :
-       {kStateArray, kMarkingArray, kGenerationArray, kParentAArray, kParentBArray, kLevelArray})
+  for (const char *n : {kStateArray, kMarkingArray, kGenerationArray, kParentAArray, kParentBArray,
+                        kLevelArray, kParentRankArray})
     if (name == n)
       return true;
   return false;

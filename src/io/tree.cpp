@@ -31,7 +31,7 @@ void put(std::vector<DataArray> &arrays, DataArray a) {
 
 bool is_tree_array(const DataArray &a) {
   return a.name == kGenerationArray || a.name == kParentAArray || a.name == kParentBArray ||
-         a.name == kLevelArray;
+         a.name == kLevelArray || a.name == kParentRankArray;
 }
 
 // The array's values as integers in [lo, hi]; InputError naming the entity.
@@ -86,6 +86,22 @@ void tree_sources(const Mesh &mesh, std::vector<ArraySource> &cells,
                       [=](std::size_t first, std::size_t n, double *out) {
                         std::copy_n(m->level.data() + first, n, out);
                       }});
+  // Explicit marking: the ranks of the split edges, which no cell holds (so
+  // bisect:edge_rank does not carry them) and coarsening needs.
+  if (mesh.marking == Marking::Explicit) {
+    auto rank = [=](std::size_t v) {
+      const VertexId a = m->parent_edge[2 * v], b = m->parent_edge[2 * v + 1];
+      if (a == kNoVertex)
+        return -1.0;
+      const auto it = m->edge_rank.find(edge_key(a, b));
+      return it == m->edge_rank.end() ? -1.0 : double(it->second);
+    };
+    points.push_back({kParentRankArray, 1, ValueType::Int32, rank,
+                      [=](std::size_t first, std::size_t n, double *out) {
+                        for (std::size_t i = 0; i < n; ++i)
+                          out[i] = rank(first + i);
+                      }});
+  }
 }
 
 DataArray materialize(const ArraySource &source, std::size_t rows) {
@@ -109,6 +125,8 @@ void encode_tree(Mesh &mesh) {
     put(mesh.point_data, materialize(a, mesh.num_vertices()));
   if (mesh.level.size() != mesh.num_vertices())
     std::erase_if(mesh.point_data, [](const DataArray &x) { return x.name == kLevelArray; });
+  if (mesh.marking != Marking::Explicit)
+    std::erase_if(mesh.point_data, [](const DataArray &x) { return x.name == kParentRankArray; });
 }
 
 void strip_tree(Mesh &mesh) {
@@ -129,7 +147,7 @@ bool decode_tree(Mesh &mesh, const std::string &path, StoredState *stored) {
       strip_tree(mesh);
       const auto tree = [](const StoredArray &a) {
         return a.name == kGenerationArray || a.name == kParentAArray || a.name == kParentBArray ||
-               a.name == kLevelArray;
+               a.name == kLevelArray || a.name == kParentRankArray;
       };
       std::erase_if(stored.cells, tree);
       std::erase_if(stored.points, tree);
@@ -139,7 +157,8 @@ bool decode_tree(Mesh &mesh, const std::string &path, StoredState *stored) {
       StateColumn::find(mesh.cell_data, &stored->cells, kGenerationArray);
   const StateColumn pa = StateColumn::find(mesh.point_data, &stored->points, kParentAArray),
                     pb = StateColumn::find(mesh.point_data, &stored->points, kParentBArray),
-                    level = StateColumn::find(mesh.point_data, &stored->points, kLevelArray);
+                    level = StateColumn::find(mesh.point_data, &stored->points, kLevelArray),
+                    rank = StateColumn::find(mesh.point_data, &stored->points, kParentRankArray);
   mesh.clear_tree();
   if (!generation && !pa && !pb)
     return false; // a lone bisect:level means nothing
@@ -205,6 +224,25 @@ bool decode_tree(Mesh &mesh, const std::string &path, StoredState *stored) {
                              std::to_string(levels[v]) +
                              (levels[v] == 0 ? " (original) but it is a midpoint"
                                              : " (made by bisection) but it has no parent edge"));
+    }
+  }
+  // Explicit marking: the ranks of the split edges (ignored otherwise, as
+  // the marking's other arrays are).
+  if (rank && mesh.marking == Marking::Explicit) {
+    check_integers(mesh, rank, nv, -1, 4294967294.0, "vertex", path);
+    for (std::size_t v = 0; v < nv; ++v) {
+      if (rank[v] == -1)
+        continue;
+      if (parents[2 * v] == kNoVertex)
+        throw InputError(path, vertex_name(mesh, VertexId(v)) + ": " + kParentRankArray +
+                                   " gives a rank to an original vertex (it has no parent edge)");
+      const VertexId a = parents[2 * v], b = parents[2 * v + 1];
+      const auto r = std::uint32_t(rank[v]);
+      const auto [it, fresh] = mesh.edge_rank.emplace(edge_key(a, b), r);
+      if (!fresh && it->second != r)
+        throw InputError(path, vertex_name(mesh, VertexId(v)) + ": " + kParentRankArray +
+                                   " gives edge " + vertex_number(mesh, a) + "-" +
+                                   vertex_number(mesh, b) + " two different ranks");
     }
   }
   mesh.generation = std::move(gen);
