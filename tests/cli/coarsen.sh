@@ -1,5 +1,5 @@
 # coarsen: refine -> file -> bisect coarsen --all gives the input's cells back
-# (2D, 3D, 4D from bisect extrude); partial coarsening (region, indicator)
+# (2D, 3D, 4D from bisect extrude, forced simplex types); partial coarsening (region, indicator)
 # passes the checks; the tree survives meshio (.vtu -> meshio -> .vtu, and
 # Gmsh 2.2); usage and input errors exit 1 with one line.
 source "$(dirname "$0")/lib.bash"
@@ -143,6 +143,21 @@ cp "$WORK/out" st-info.json
 [[ $(json_field st.json cells) == $(json_field st-info.json cells) ]] || fail "4D cells: $(cat st.json)"
 [[ $(json_field st.json vertices) == $(json_field st-info.json vertices) ]] || fail "4D vertices"
 expect_exit 0 "$BISECT" check st-back.vtu --against st.vtu
+
+# Forced types (generate simplex --type): the explicit edge order survives
+# the refined file (bisect:parent_rank: the split edges' ranks, which no cell
+# holds any more), so coarsening rebuilds the Stage 1 parents.
+for dt in 3:P 3:A 3:O 3:M 4:A_PO 4:O_OO 4:M_MM; do
+  dim=${dt%%:*} type=${dt#*:}
+  expect_exit 0 "$BISECT" generate simplex --dim $dim --type $type --shape random -o forced-$type.vtu -q
+  expect_exit 0 "$BISECT" refine forced-$type.vtu --region "$ROOT/data/regions/everything${dim}d.json" -n 3 \
+    -o forced-$type-3.vtu -q --quality-csv none
+  expect_exit 0 "$BISECT" coarsen forced-$type-3.vtu --all -n 3 -o forced-$type-0.vtu --json -q
+  cp "$WORK/out" forced-$type.json
+  [[ $(json_field forced-$type.json cells) == 1 ]] || fail "forced $type: $(cat forced-$type.json)"
+  [[ $(json_field forced-$type.json vertices) == $((dim + 1)) ]] || fail "forced $type: vertices"
+  expect_exit 0 "$BISECT" check forced-$type-0.vtu --against forced-$type.vtu
+done
 
 # Errors: one line, exit 1.
 expect_exit 1 "$BISECT" coarsen square-index.vtu -o x.vtu

@@ -5,11 +5,13 @@
 #include "bisect/coarsen.hpp"
 #include "bisect/colour.hpp"
 #include "bisect/extrude.hpp"
+#include "bisect/generate.hpp"
 #include "bisect/io.hpp"
 #include "bisect/mark.hpp"
 #include "bisect/measure.hpp"
 #include "bisect/refine.hpp"
 #include "bisect/state.hpp"
+#include "bisect/threads.hpp"
 #include "engine/coarsen_pass.hpp"
 #include "support.hpp"
 
@@ -399,6 +401,72 @@ TEST_CASE("coarsen: the tree survives a .vtu and a .msh file", "[coarsen][io]") 
   std::filesystem::remove_all(dir);
 }
 
+TEST_CASE("coarsen: a simplex of a forced type comes back after N refinements through files",
+          "[coarsen][3d][4d][io]") {
+  // `generate simplex --type T`, `refine -n N` everywhere, `coarsen --all -n
+  // N`, each through a file as the CLI goes: the explicit edge order must
+  // survive the refined file, whose cells no longer hold the split edges
+  // (their ranks decide the Stage 1 parents coarsening rebuilds).
+  const auto dir = std::filesystem::temp_directory_path() / "bisect_test_coarsen_forced";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "mesh.vtu").string();
+  // One thread: these meshes are tiny, and waking a team for each of the
+  // writers' and checks' loops costs most of the time on a busy machine
+  // (results do not depend on the count, threads.hpp).
+  set_threads(1);
+  auto through_file = [&](Mesh &m) {
+    save_mesh(path, m);
+    m = load_mesh(path);
+  };
+  const std::vector<std::string> tets = {"P", "A", "O", "M"};
+  const std::vector<std::string> pentatopes = {
+      "A_AA", "A_AM", "A_AO", "A_MM", "A_OM", "A_PA", "A_PM", "A_PO", "A_PP", "M_AA",
+      "M_AM", "M_AO", "M_MM", "M_OM", "M_OO", "M_PA", "M_PM", "M_PO", "M_PP", "O_AA",
+      "O_AM", "O_AO", "O_MM", "O_OM", "O_OO", "O_PA", "O_PM", "O_PO", "O_PP", "P_AA",
+      "P_AM", "P_MM", "P_OM", "P_OO", "P_PA", "P_PM", "P_PP"};
+  for (const int dim : {3, 4})
+    for (const SimplexShape shape :
+         {SimplexShape::Equilateral, SimplexShape::Cartesian, SimplexShape::Random})
+      for (const std::string &type : dim == 3 ? tets : pentatopes) {
+        Mesh input = generate_simplex(dim, shape);
+        force_type(input, type);
+        through_file(input);
+        const Invariants inv = measure_invariants(input);
+        Mesh once = input;
+        refine_uniform(once);
+        Mesh m = input;
+        // (Without the split edges' ranks in the file, N = 1 already
+        // failed; the 111 pentatopes are kept to a few iterations.)
+        const int iterations = dim == 3 ? 6 : shape == SimplexShape::Random ? 4 : 2;
+        for (int n = 1; n <= iterations; ++n) {
+          INFO(dim << "D " << type << " shape " << int(shape) << ", " << n << " iterations");
+          refine_uniform(m);
+          Mesh c = m;
+          through_file(c);
+          REQUIRE_CONFORMING(c, inv);
+          // In memory and from the file alike.
+          for (Mesh *k : {&m, &c}) {
+            Mesh back = *k;
+            const CoarsenResult r = coarsen_all(back, n);
+            REQUIRE(r.removed_vertices == k->num_vertices() - input.num_vertices());
+            REQUIRE(back.num_cells() == 1);
+            REQUIRE(back.num_vertices() == input.num_vertices());
+            REQUIRE(back.coords == input.coords);
+            REQUIRE(cell_shapes(back) == cell_shapes(input));
+            REQUIRE_CONFORMING(back, inv);
+            // The forced order came back whole: refining again gives what
+            // refining the input gives.
+            through_file(back);
+            REQUIRE(back.edge_rank == input.edge_rank);
+            refine_uniform(back);
+            REQUIRE(cell_shapes(back) == cell_shapes(once));
+          }
+        }
+      }
+  set_threads(0);
+  std::filesystem::remove_all(dir);
+}
+
 TEST_CASE("coarsen: cell arrays take the common value, the mean, or the sum", "[coarsen]") {
   Mesh m = input_mesh(3, Marking::Longest, 4);
   const std::size_t nc = m.num_cells();
@@ -500,4 +568,30 @@ TEST_CASE("coarsen: bad tree arrays are input errors naming the file and the arr
         }
     }
   REQUIRE_THROWS_AS(decode_state(e, "bad.vtu"), InputError);
+  // bisect:parent_rank (explicit marking): a rank for an original vertex,
+  // not an integer in -1..2^32-2.
+  Mesh forced = generate_simplex(3, SimplexShape::Cartesian);
+  force_type(forced, "O");
+  refine_uniform(forced);
+  auto expect_rank_error = [&](std::size_t v, double value, const char *what) {
+    Mesh f = forced;
+    encode_state(f);
+    for (DataArray &a : f.point_data)
+      if (a.name == kParentRankArray)
+        a.values[v] = value;
+    try {
+      decode_state(f, "bad.vtu");
+      FAIL("no error for " << kParentRankArray << " = " << value << " at " << v);
+    } catch (const InputError &err) {
+      const std::string msg = err.what();
+      INFO(msg);
+      CHECK(msg.find("bad.vtu") != std::string::npos);
+      CHECK(msg.find(kParentRankArray) != std::string::npos);
+      CHECK(msg.find(what) != std::string::npos);
+    }
+  };
+  REQUIRE(forced.num_vertices() == 5);
+  expect_rank_error(0, 0, "original vertex");
+  expect_rank_error(4, 0.5, "not an integer in");
+  expect_rank_error(4, -2, "not an integer in");
 }
