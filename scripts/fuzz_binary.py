@@ -492,7 +492,7 @@ ATTRS = {
     b"byte_order": [b"BigEndian", b"LittleEndian", b"Middle"],
     b"encoding": [b"raw", b"base64", b"hex"],
     b"version": [b"0.1", b"1.0", b"2.2", b"99", b""],
-    b"Name": [b"bisect:state", b"bisect:generation", b"bisect:parent_a", b"bisect:parent_b", b"bisect:order", b"bisect:stage", b"bisect:tag", b"bisect:marking", b"bisect:edge_rank",
+    b"Name": [b"bisect:state", b"bisect:generation", b"bisect:parent_a", b"bisect:parent_b", b"bisect:order", b"bisect:stage", b"bisect:tag", b"bisect:marking", b"bisect:edge_rank", b"bisect:parent_rank", b"bisect:level",
               b"t", b"connectivity", b"offsets", b"types", b"Points", b"colour", b"SpatialDimension", b""],
 }
 ATTR_RE = re.compile(rb'\b(' + b"|".join(ATTRS) + rb')="([^"]*)"')
