@@ -33,6 +33,7 @@
 #include "bisect/check.hpp"
 #include "bisect/io.hpp"
 #include "bisect/output.hpp"
+#include "bisect/text.hpp"
 #include "io/file_bytes.hpp"
 #include "io/msh_testing.hpp"
 #include "io/state_arrays.hpp"
@@ -167,21 +168,7 @@ std::string type_text(long long type) {
 // Shows a token in an error message: at most 40 characters, bytes outside
 // printable ASCII as \xNN.
 std::string quoted(std::string_view t) {
-  std::string out = "'";
-  const std::size_t n = std::min<std::size_t>(t.size(), 40);
-  for (std::size_t i = 0; i < n; ++i) {
-    const unsigned char c = static_cast<unsigned char>(t[i]);
-    if (c >= 32 && c < 127) {
-      out += char(c);
-    } else {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02X", c);
-      out += buf;
-    }
-  }
-  if (t.size() > n)
-    out += "...";
-  return out + "'";
+  return "'" + shown_name(t.substr(0, 40)) + (t.size() > 40 ? "...'" : "'");
 }
 
 bool is_space(char c) {

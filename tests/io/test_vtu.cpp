@@ -176,6 +176,18 @@ std::string ascii_array(const std::string &type, const std::string &name, int co
          std::to_string(components) + "\" format=\"ascii\">" + values + "</DataArray>\n";
 }
 
+// One tetrahedron (4 points, VTK type 10), no arrays.
+AsciiVtu one_tet() {
+  AsciiVtu f;
+  f.num_points = 4;
+  f.points = "0 0 0  1 0 0  0 1 0  0 0 1";
+  f.num_cells = 1;
+  f.connectivity = "0 1 2 3";
+  f.offsets = "4";
+  f.types = "10";
+  return f;
+}
+
 // data/square-tagged.msh and data/box-tagged.msh, marked with `marking` and
 // refined `iterations` times around a sphere near a corner, by name.
 std::vector<std::pair<std::string, Mesh>> refined_tagged(Marking marking, int iterations) {
@@ -510,13 +522,7 @@ TEST_CASE("vtu: a non-finite coordinate is rejected naming the point", "[io][3d]
 
 TEST_CASE("vtu: array with the wrong tuple count is rejected naming it", "[io][3d]") {
   TempDir dir;
-  AsciiVtu f;
-  f.num_points = 4;
-  f.points = "0 0 0  1 0 0  0 1 0  0 0 1";
-  f.num_cells = 1;
-  f.connectivity = "0 1 2 3";
-  f.offsets = "4";
-  f.types = "10";
+  AsciiVtu f = one_tet();
   f.point_data = ascii_array("Float64", "short_array", 1, "1 2 3");
   write_text(dir.file("short.vtu"), f.text());
   require_clean_read_error(dir.file("short.vtu"), "short_array");
@@ -525,13 +531,7 @@ TEST_CASE("vtu: array with the wrong tuple count is rejected naming it", "[io][3
 TEST_CASE("vtu: a name that is not UTF-8 text is refused, reading and writing", "[io][3d]") {
   // VTK reads no cells from a .vtu with such a name: no run may write one.
   TempDir dir;
-  AsciiVtu f;
-  f.num_points = 4;
-  f.points = "0 0 0  1 0 0  0 1 0  0 0 1";
-  f.num_cells = 1;
-  f.connectivity = "0 1 2 3";
-  f.offsets = "4";
-  f.types = "10";
+  AsciiVtu f = one_tet();
   f.point_data = ascii_array("Float64", "caf\xE9", 1, "1 2 3 4"); // Latin-1, not UTF-8
   write_text(dir.file("latin1.vtu"), f.text());
   require_clean_read_error(dir.file("latin1.vtu"), "caf\\xE9");
