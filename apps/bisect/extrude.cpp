@@ -64,7 +64,16 @@ int run_extrude(const ExtrudeArgs &a) {
     throw InputError(a.input, "extrude needs a 3D tetrahedral mesh, this one is " +
                                   std::to_string(mesh.dim) + "D");
   Mesh m4 = about_file(a.input, [&] { return extrude_delaunay(mesh, ts, a.hull); });
-  return write_generated(std::move(m4), a.output, a.force, a.flags, {a.input});
+  try {
+    return write_generated(std::move(m4), a.output, a.force, a.flags, {a.input});
+  } catch (const CheckError &e) {
+    // Qhull's triangulation of nearly degenerate points (a slab far thinner
+    // than the mesh, a mesh barely non-convex) can fail the validation.
+    throw CheckError(std::string(e.what()) +
+                     "; Delaunay could not triangulate these points robustly (slabs much "
+                     "thinner than the mesh, or a mesh not quite convex): --method colouring "
+                     "extrudes without Delaunay");
+  }
 }
 
 } // namespace

@@ -37,6 +37,7 @@ rc=$?
 set -e
 [[ $rc == 2 || $rc == 1 ]] || { cat "$WORK/err" >&2; fail "thin slab: exit $rc"; }
 one_line_naming "thin.vtu"
+grep -q -- "--method colouring" "$WORK/err" || fail "thin slab: no hint of --method colouring"
 [[ ! -e thin.vtu ]] || fail "thin slab: output left behind"
 # The colouring extrusion writes each point's slab as the point array slice:
 # an input array of that name is refused rather than written twice.
