@@ -8,13 +8,13 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <new>
 #include <random>
 #include <string>
 
 extern "C" {
-#include <cstdlib>
 #include <libqhull_r/qhull_ra.h>
-#include <new>
 }
 
 namespace bisect {
