@@ -8,7 +8,6 @@
 #include "bisect/state.hpp"
 
 #include "bisect/output.hpp"
-#include "bisect/text.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -87,32 +86,12 @@ void write_as(Format format, const std::string &path, const Mesh &mesh, const Wr
 
 namespace {
 
-// Every read ends here (settle_plane): the names of arrays and physical
-// groups must be text a .vtu can hold (is_name_text), or the file written
-// at the end of the run would be one VTK reads no cells from.
-void check_names(const Mesh &mesh, const std::string &path) {
-  auto check = [&](const std::string &name, const char *what) {
-    if (!is_name_text(name))
-      throw InputError(path, std::string(what) + " '" + shown_name(name) +
-                                 "' is not UTF-8 text without control characters");
-  };
-  for (const DataArray &a : mesh.point_data)
-    check(a.name, "point array name");
-  for (const DataArray &a : mesh.cell_data)
-    check(a.name, "cell array name");
-  for (const Entities &b : mesh.entities)
-    for (const DataArray &a : b.data)
-      check(a.name, "array name");
-  for (const PhysicalName &n : mesh.physical_names)
-    check(n.name, "physical name");
-}
-
 // A triangle mesh off z = 0 (the readers put its z into kPlaneZArray) is
 // accepted when it lies in one plane z = c up to 1e-12 of its extent; the
 // array then stays (refinement interpolates it, the writers put it back),
 // unless every z is 0. Anything less flat is a surface in 3D.
 void settle_plane(Mesh &mesh, const std::string &path, Format format) {
-  check_names(mesh, path);
+  check_names(mesh, path); // every read ends here: names a .vtu can hold (vtu_write.hpp)
   if (mesh.dim != 2)
     return;
   auto it = std::find_if(mesh.point_data.begin(), mesh.point_data.end(),

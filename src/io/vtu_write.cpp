@@ -723,6 +723,23 @@ void write_physical_names(Writer &w, VtuCompression compression, int level, cons
 
 } // namespace
 
+void check_names(const Mesh &mesh, const std::string &path) {
+  auto check = [&](const std::string &name, const char *what) {
+    if (!is_name_text(name))
+      throw InputError(path, std::string(what) + " '" + shown_name(name) +
+                                 "' is not UTF-8 text without control characters");
+  };
+  for (const DataArray &a : mesh.point_data)
+    check(a.name, "point array name");
+  for (const DataArray &a : mesh.cell_data)
+    check(a.name, "cell array name");
+  for (const Entities &b : mesh.entities)
+    for (const DataArray &a : b.data)
+      check(a.name, "array name");
+  for (const PhysicalName &n : mesh.physical_names)
+    check(n.name, "physical name");
+}
+
 void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression compression,
                       int level, const StateArrays *state) {
   const std::size_t nv = mesh.num_vertices(), ncells = mesh.num_cells();
@@ -734,22 +751,7 @@ void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression 
     entity_ids += b.vertices.size();
   }
   const std::size_t nc = ncells + nentities;
-  // A name that is not text (is_name_text) makes a file VTK reads no cells
-  // from: the readers refuse one, and a mesh built in memory is refused here.
-  auto check_name = [&](const std::string &name) {
-    if (!is_name_text(name))
-      throw InputError(path, "the name '" + shown_name(name) +
-                                 "' is not UTF-8 text without control characters: a .vtu "
-                                 "cannot hold it");
-  };
-  for (const auto *arrays : {&mesh.point_data, &mesh.cell_data})
-    for (const DataArray &a : *arrays)
-      check_name(a.name);
-  for (const Entities &b : mesh.entities)
-    for (const DataArray &a : b.data)
-      check_name(a.name);
-  for (const PhysicalName &n : mesh.physical_names)
-    check_name(n.name);
+  check_names(mesh, path);
   Writer w(path);
   w.text("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
          "byte_order=\"LittleEndian\" header_type=\"UInt64\"");

@@ -19,6 +19,12 @@ using VtuCompression = Compression;
 // are Int32, other arrays Float64.
 // With `state` (stream_state), the bisection state's arrays are written from
 // it, and stored arrays it hides are not.
+// The names of arrays and physical groups must be text a .vtu attribute
+// keeps (is_name_text in text.hpp; VTK reads no cells from a file with one
+// that is not): InputError naming `path` and the first that is not. Every
+// read checks (io.cpp), and the .vtu writer, for meshes built in memory.
+void check_names(const Mesh &mesh, const std::string &path);
+
 void write_vtu_native(const std::string &path, const Mesh &mesh, VtuCompression compression,
                       int level = 1, const StateArrays *state = nullptr);
 
