@@ -1,11 +1,13 @@
 // Helpers the commands share (cli.hpp).
 #include "cli.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <fcntl.h>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <sstream>
 #include <sys/resource.h>
@@ -154,16 +156,33 @@ void write_output_mesh(OutputSet &outputs, int h, Mesh &mesh, const WriteOptions
 }
 
 // "<output stem>.t<value>.vtu" beside the output.
-std::string slice_path(const std::string &output, const char *axis, double value) {
+std::string slice_path(const std::string &output, const char *axis, double value, int digits) {
   fs::path p(output);
   std::ostringstream name;
-  name << p.stem().string() << "." << axis << value << ".vtu";
+  name << p.stem().string() << "." << axis << std::setprecision(digits) << value << ".vtu";
   return (p.parent_path() / name.str()).string();
 }
 
+int slice_digits(const std::vector<double> &values) {
+  for (int digits = 6;; ++digits) {
+    std::vector<std::string> shown;
+    for (double v : values) {
+      std::ostringstream s;
+      s << std::setprecision(digits) << v;
+      shown.push_back(s.str());
+    }
+    std::sort(shown.begin(), shown.end());
+    // 17 significant digits tell every two doubles apart.
+    if (digits == 17 || std::adjacent_find(shown.begin(), shown.end()) == shown.end())
+      return digits;
+  }
+}
+
 // Writes the section of `mesh` at coordinate `axis` = `value` into output
-// `h`; returns the line to print once the outputs are committed.
-SliceWritten write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h) {
+// `h`; returns the line to print once the outputs are committed (the value
+// with `digits` significant digits, as in its file name).
+SliceWritten write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h,
+                         int digits) {
   Mesh s = slice_mesh(mesh, axis, value);
   // The 4D bisection state means nothing on a 3D section.
   std::erase_if(s.cell_data, [](const DataArray &d) { return d.name.rfind("bisect:", 0) == 0; });
@@ -177,7 +196,8 @@ SliceWritten write_slice(const Mesh &mesh, int axis, double value, OutputSet &ou
   std::ostringstream line;
   line << "bisect: wrote " << outputs.name(h) << " (" << with_commas(s.num_cells())
        << (s.dim == 3 ? " tetrahedra" : " triangles") << ": the section "
-       << (axis == mesh.dim - 1 ? 't' : "xyz"[axis]) << " = " << value << ")\n";
+       << (axis == mesh.dim - 1 ? 't' : "xyz"[axis]) << " = " << std::setprecision(digits) << value
+       << ")\n";
   return {line.str(), s.dim, s.num_cells(), s.num_vertices()};
 }
 

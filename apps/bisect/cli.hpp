@@ -85,8 +85,12 @@ std::string output_name(const std::string &name, const std::string &format, bool
 // --format vtu|msh: the output's format when its name has no extension.
 void add_format_option(CLI::App *cmd, std::string &format);
 
-// "<output stem>.<axis><value>.vtu" beside the output.
-std::string slice_path(const std::string &output, const char *axis, double value);
+// "<output stem>.<axis><value>.vtu" beside the output, the value with
+// `digits` significant digits.
+std::string slice_path(const std::string &output, const char *axis, double value, int digits = 6);
+// The fewest significant digits, at least 6, that give distinct values
+// distinct names (a set of slices 1e-7 apart gets more than 6).
+int slice_digits(const std::vector<double> &values);
 
 // A section write_slice() wrote: the line to print once the outputs are
 // committed, and the section's size.
@@ -97,8 +101,10 @@ struct SliceWritten {
 };
 
 // Writes the section of `mesh` at coordinate `axis` = `value` into output
-// `h`. An empty section is an InputError naming the output.
-SliceWritten write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h);
+// `h`. An empty section is an InputError naming the output. The line gives
+// the value with `digits` significant digits, as its file name does.
+SliceWritten write_slice(const Mesh &mesh, int axis, double value, OutputSet &outputs, int h,
+                         int digits = 6);
 
 // --slices of extrude and refine: "0,0.5,1" or "start:stop:count" (count
 // slabs, count + 1 slices, both ends included); increasing values, at least

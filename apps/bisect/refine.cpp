@@ -127,8 +127,9 @@ int run_refine(RefineArgs &a) {
   const int h_mesh = outputs.add(out);
   const int h_csv = csv == "none" ? -1 : outputs.add(csv);
   std::vector<int> h_slices;
+  const int digits = slice_digits(a.slices);
   for (double t : a.slices)
-    h_slices.push_back(outputs.add(slice_path(out, "t", t)));
+    h_slices.push_back(outputs.add(slice_path(out, "t", t, digits)));
 
   StageSeconds stages;
   auto t0 = std::chrono::steady_clock::now();
@@ -282,7 +283,7 @@ int run_refine(RefineArgs &a) {
   write_output_mesh(outputs, h_mesh, mesh, write_options);
   std::string slice_lines;
   for (std::size_t i = 0; i < a.slices.size(); ++i)
-    slice_lines += write_slice(mesh, mesh.dim - 1, a.slices[i], outputs, h_slices[i]).line;
+    slice_lines += write_slice(mesh, mesh.dim - 1, a.slices[i], outputs, h_slices[i], digits).line;
   outputs.commit();
   stages.write = seconds_since(t_write);
   if (!quiet)

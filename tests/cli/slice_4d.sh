@@ -45,6 +45,11 @@ for t in 0 0.25 0.5 0.75 1; do expect_exit 0 "$BISECT" check k3q.t$t.vtu; done
 [[ $(ls k3q.t*.vtu | wc -l) == 5 ]] || fail "--slices 0:1:4 wrote $(ls k3q.t*.vtu)"
 expect_exit 0 "$BISECT" refine k3.vtu --region "$ROOT/data/regions/sphere.json" -n 1 -o k3one.vtu --slices 0.5 --quiet
 [[ -f k3one.t0.5.vtu ]] || fail "--slices 0.5: no section written"
+# Values that agree to 6 significant digits get names with more of them,
+# not one name for two files.
+expect_exit 0 "$BISECT" refine k3.vtu --region "$ROOT/data/regions/sphere.json" -n 1 -o k3near.vtu --slices 0.5,0.5000001
+[[ -f k3near.t0.5.vtu && -f k3near.t0.5000001.vtu ]] || fail "--slices 0.5,0.5000001 wrote $(ls k3near.t*)"
+grep -q "t = 0.5000001)" "$WORK/err" || fail "the section line does not show 0.5000001: $(cat "$WORK/err")"
 for bad in 0:1 0:1:0 1,0.5 0.5,0.5 a,1; do
   expect_exit 1 "$BISECT" refine k3.vtu --region "$ROOT/data/regions/sphere.json" -o bad.vtu --slices $bad
   one_line_naming "--slices"
