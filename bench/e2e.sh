@@ -18,6 +18,9 @@
 #                                     # the run of median time is printed, with all the
 #                                     # times ("seconds_all")
 #
+# The first line describes the machine (bench/machine.cpp; MACHINE=path to
+# its binary, default beside BISECT).
+#
 # Figures: generated cells per second (cells made / whole run), seconds per
 # million generated cells, and peak resident bytes per final cell; for a
 # thread count other than 1, "speedup_over_1_thread" (one thread's median
@@ -96,6 +99,17 @@ for threads, js in by_threads.items():
 EOF
   rm -f "$runs"
 }
+
+# The machine first (bench/machine.cpp): its memory's first-touch rate,
+# bandwidth and latency and its core's speed, for setting these figures
+# beside those of another machine.
+machine=${MACHINE:-$(dirname "$BISECT")/bisect_machine}
+if [[ -x $machine ]]; then
+  "$machine" | /usr/bin/python3 -c 'import json, sys; j = json.loads(sys.stdin.read()); j.pop("check"); j["load_before"] = sys.argv[1]; j["cpus"] = int(sys.argv[2]); print(json.dumps(j))' \
+    "$(cut -d' ' -f1-3 /proc/loadavg)" "$cpus"
+else
+  echo "bench/e2e.sh: no $machine (cmake --build build --target bisect_machine): no machine figures" >&2
+fi
 
 run_case ball-hemisphere "$root/data/ball.msh" "$root/data/regions/hemisphere.json" "$ITER3D"
 # An adaptive loop's next step: that refined file, with its bisection state,
