@@ -187,18 +187,16 @@ public:
   void refine(const std::vector<CellId> &selected) {
     nc0_ = num_cells();
     done_.assign(nc0_, 0);
-    // Room for the iteration, about (the closure makes ~1-2 more per selected).
-    const std::size_t want = nc0_ + 4 * selected.size();
+    // Room for the iteration, as refine() makes it (Refiner::reserve): 3 new
+    // cells per selected one, and the arrays at least double when they grow.
+    // Vertices grow as refine()'s do: by the vectors' own doubling.
+    const std::size_t want = nc0_ + 3 * selected.size();
     if (tag.capacity() < want) {
-      cells.reserve(4 * want);
-      nb.reserve(4 * want);
-      tag.reserve(want);
-      gen.reserve(want);
-    }
-    const std::size_t wantv = num_vertices() + selected.size();
-    if (coords.capacity() < 3 * wantv) {
-      coords.reserve(3 * wantv);
-      parent_edge.reserve(2 * wantv);
+      const std::size_t cap = std::max(want, 2 * nc0_);
+      cells.reserve(4 * cap);
+      nb.reserve(4 * cap);
+      tag.reserve(cap);
+      gen.reserve(cap);
     }
     for (CellId c : selected)
       if (!done_[c])
