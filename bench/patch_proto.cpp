@@ -10,14 +10,23 @@
 // selection rule, one thread.
 //
 // Usage: patch_proto ours|proto|check K iterations [radius band]
+//        patch_proto ours|proto|check MESH.msh iterations
+//   K: the Kuhn cube [0,1]^3 with K^3 cubes (6 K^3 tets), selection: the
+//      vertex band around a sphere (Selection below);
+//   MESH.msh: read and validated as bisect_bench does, its tagged entities
+//      and data arrays dropped (the prototype carries none), selection: the
+//      hemisphere region of bisect_bench's 3D run (select_cells).
 //   ours:  bisect::refine() alone, timed per iteration, peak RSS
 //   proto: the prototype alone, timed per iteration, peak RSS
 //   check: both in one process; after every iteration compares cell counts
 //          and the cells (by their vertices' coordinates), and checks the
 //          prototype's conformity (facets sorted), volume and neighbours.
+#include "bisect/check.hpp"
 #include "bisect/generate.hpp"
+#include "bisect/io.hpp"
 #include "bisect/mark.hpp"
 #include "bisect/refine.hpp"
+#include "bisect/region.hpp"
 #include "bisect/threads.hpp"
 #include "core/numbering.hpp"
 
@@ -30,6 +39,7 @@
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -373,7 +383,7 @@ private:
 };
 
 // Checks of the prototype's mesh after an iteration (fails loudly).
-void check_patch(const Patch &p, double volume0) {
+void check_patch(const Patch &p, double volume0, bool cube) {
   const std::size_t nc = p.num_cells();
   std::vector<Facet> f = sorted_facets(p.cells.data(), nc);
   std::size_t boundary = 0, interior = 0;
@@ -408,7 +418,7 @@ void check_patch(const Patch &p, double volume0) {
     std::size_t j = i + 1;
     while (j < f.size() && f[j].same(f[i]))
       ++j;
-    if (j - i == 1) {
+    if (cube && j - i == 1) {
       const VertexId ids[3] = {VertexId(f[i].ab >> 32), VertexId(f[i].ab), f[i].c};
       bool on_face = false;
       for (int k = 0; k < 3 && !on_face; ++k) {
@@ -423,8 +433,20 @@ void check_patch(const Patch &p, double volume0) {
   }
 }
 
-Mesh make_input(int k) {
-  Mesh m = generate_kuhn(3, k);
+Mesh make_input(const std::string &input) {
+  Mesh m;
+  if (input.find_first_not_of("0123456789") == std::string::npos) {
+    m = generate_kuhn(3, std::atoi(input.c_str()));
+  } else {
+    m = read_mesh(input);
+    prepare_input(m, input);
+    m.entities.clear();
+    m.cell_data.clear();
+    m.point_data.clear();
+    m.physical_names.clear();
+    if (m.dim != 3)
+      fail("not a 3D mesh");
+  }
   mark_mesh(m, Marking::Index);
   for (std::size_t c = 0; c < m.num_cells(); ++c)
     if (m.stage[c] != Stage::Maubach || m.tag[c] < 1 || m.tag[c] > 3)
@@ -446,11 +468,13 @@ Patch make_patch(const Mesh &m) {
 
 int main(int argc, char **argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: patch_proto ours|proto|check K iterations [radius band]\n");
+    std::fprintf(stderr, "usage: patch_proto ours|proto|check K|MESH.msh iterations [radius band]\n");
     return 1;
   }
   const std::string mode = argv[1];
-  const int k = std::atoi(argv[2]), iterations = std::atoi(argv[3]);
+  const std::string input = argv[2];
+  const bool cube = input.find_first_not_of("0123456789") == std::string::npos;
+  const int iterations = std::atoi(argv[3]);
   Selection select;
   if (argc > 4)
     select.radius = std::atof(argv[4]);
@@ -461,7 +485,21 @@ int main(int argc, char **argv) {
   if (!ours && !proto)
     fail("mode must be ours, proto or check");
 
-  Mesh mesh = make_input(k);
+  Mesh mesh = make_input(input);
+  // The file's selection: bisect_bench's 3D region (one per implementation).
+  const char *hemisphere = R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,)"
+                           R"("normal":[1,0,0],"offset":0.5})";
+  std::unique_ptr<Region> region_ours, region_proto;
+  if (!cube) {
+    region_ours = parse_region(hemisphere, 3, "bench");
+    region_proto = parse_region(hemisphere, 3, "bench");
+  }
+  // The selections, outside the timed refinement. The prototype's arrays are
+  // lent to a Mesh for select_cells (swapped, not copied: no memory).
+  auto select_ours = [&]() {
+    return cube ? select(mesh.cells.data(), mesh.num_cells(), mesh.coords.data())
+                : select_cells(mesh, *region_ours);
+  };
   const std::size_t nc_in = mesh.num_cells();
   const double volume0 = total_volume(mesh.cells.data(), nc_in, mesh.coords.data());
   Patch patch;
@@ -474,9 +512,25 @@ int main(int argc, char **argv) {
     if (!ours)
       mesh = Mesh{};
   }
+  auto select_proto = [&]() {
+    if (cube)
+      return select(patch.cells.data(), patch.num_cells(), patch.coords.data());
+    Mesh view;
+    view.dim = 3;
+    view.cells.swap(patch.cells);
+    view.coords.swap(patch.coords);
+    std::vector<CellId> sel = select_cells(view, *region_proto);
+    view.cells.swap(patch.cells);
+    view.coords.swap(patch.coords);
+    return sel;
+  };
   const long rss0 = proc_status_kb("VmRSS:");
-  std::printf("mode %s, Kuhn k=%d: %zu tets, sphere r=%g band=%g, %d iterations, 1 thread\n",
-              mode.c_str(), k, nc_in, select.radius, select.band, iterations);
+  if (cube)
+    std::printf("mode %s, Kuhn k=%s: %zu tets, sphere r=%g band=%g, %d iterations, 1 thread\n",
+                mode.c_str(), input.c_str(), nc_in, select.radius, select.band, iterations);
+  else
+    std::printf("mode %s, %s: %zu tets, bisect_bench's hemisphere, %d iterations, 1 thread\n",
+                mode.c_str(), input.c_str(), nc_in, iterations);
   if (proto)
     std::printf("neighbour array built in %.4f s (%.1f M tets/s)\n", t_build,
                 1e-6 * nc_in / t_build);
@@ -487,7 +541,7 @@ int main(int argc, char **argv) {
   for (int it = 1; it <= iterations; ++it) {
     std::size_t cells_ours = 0, cells_proto = 0;
     if (ours) {
-      const auto sel = select(mesh.cells.data(), mesh.num_cells(), mesh.coords.data());
+      const auto sel = select_ours();
       const auto t0 = Clock::now();
       const RefineResult r = refine(mesh, sel);
       const double t = secs(t0, Clock::now());
@@ -501,7 +555,7 @@ int main(int argc, char **argv) {
                   r.closure_passes);
     }
     if (proto) {
-      const auto sel = select(patch.cells.data(), patch.num_cells(), patch.coords.data());
+      const auto sel = select_proto();
       const std::size_t b0 = patch.bisections, rings0 = patch.rings, push0 = patch.pushes;
       const auto t0 = Clock::now();
       patch.refine(sel);
@@ -515,7 +569,7 @@ int main(int argc, char **argv) {
         if (cells_proto != cells_ours)
           fail("iteration " + std::to_string(it) + ": cell counts differ, ours " +
                std::to_string(cells_ours) + ", prototype " + std::to_string(cells_proto));
-        check_patch(patch, volume0);
+        check_patch(patch, volume0, cube);
         if (cell_hashes(mesh.cells.data(), mesh.num_cells(), mesh.coords.data()) !=
             cell_hashes(patch.cells.data(), patch.num_cells(), patch.coords.data()))
           fail("iteration " + std::to_string(it) + ": the two meshes' cells differ");
