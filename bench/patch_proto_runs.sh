@@ -1,6 +1,6 @@
 #!/bin/sh
 # Alternated timing runs of patch_proto (issue 13): ours, proto, 3 times each.
-# Usage: bench/patch_proto_runs.sh [K=30] [iterations=8] [radius=0.3] [band=0.002]
+# Usage: bench/patch_proto_runs.sh [K=30 or MESH.msh] [iterations=8] [radius=0.3] [band=0.002]
 set -e
 cd "$(dirname "$0")/.."
 K=${1:-30}; IT=${2:-8}; R=${3:-0.3}; B=${4:-0.002}
