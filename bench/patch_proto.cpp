@@ -169,6 +169,7 @@ public:
   std::vector<std::uint16_t> gen;    // per tet: bisections since the start (the tree, as ours)
   std::vector<VertexId> parent_edge; // 2 per vertex (the tree, as ours)
   std::size_t bisections = 0, rings = 0, ring_cells = 0, pushes = 0, max_stack = 0;
+  std::size_t collects = 0, walked = 0; // ring walks, and the cells they visited
 
   std::size_t num_cells() const { return tag.size(); }
   std::size_t num_vertices() const { return coords.size() / 3; }
@@ -244,6 +245,7 @@ private:
   void collect_ring(CellId c, VertexId a, VertexId b) {
     ring_.clear();
     ring_.push_back(c);
+    ++collects;
     int k1, k2;
     others(c, a, b, k1, k2);
     CellId prev = c, cur = nb[4 * std::size_t(c) + k1];
@@ -290,6 +292,7 @@ private:
           break;
         }
       if (first_other != kNoCell) {
+        walked += ring_.size();
         stack_.push_back(first_other);
         ++pushes;
         max_stack = std::max(max_stack, stack_.size());
@@ -297,6 +300,7 @@ private:
           fail("recursion deeper than 10000: a cycle (inconsistent tags?)");
         continue;
       }
+      walked += ring_.size();
       bisect_ring(a, b);
       stack_.pop_back();
     }
@@ -592,6 +596,8 @@ int main(int argc, char **argv) {
     std::printf("TOTAL proto: %.4f s, %zu bisections, %.2f M generated tets/s (+ %.4f s "
                 "neighbour build once)\n",
                 t_proto, b_proto, 2e-6 * b_proto / t_proto, t_build);
+    std::printf("proto: %zu ring walks visiting %zu cells for %zu rings of %zu cells (%zu pushes)\n",
+                patch.collects, patch.walked, patch.rings, patch.ring_cells, patch.pushes);
     // What building the array from scratch would cost on the result (a
     // refine() that did not keep it between calls), and a last check: the
     // array kept current equals the one built.
