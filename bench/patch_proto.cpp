@@ -18,6 +18,8 @@
 //      hemisphere region of bisect_bench's 3D run (select_cells).
 //   ours:  bisect::refine() alone, timed per iteration, peak RSS
 //   proto: the prototype alone, timed per iteration, peak RSS
+//   PROTO_THREADS=N in the environment: the library's threads (default 1;
+//          the prototype itself is serial).
 //   check: both in one process; after every iteration compares cell counts
 //          and the cells (by their vertices' coordinates), and checks the
 //          prototype's conformity (facets sorted), volume and neighbours.
@@ -484,7 +486,7 @@ int main(int argc, char **argv) {
     select.radius = std::atof(argv[4]);
   if (argc > 5)
     select.band = std::atof(argv[5]);
-  set_threads(1);
+  set_threads(std::getenv("PROTO_THREADS") ? std::atoi(std::getenv("PROTO_THREADS")) : 1);
   const bool ours = mode == "ours" || mode == "check", proto = mode == "proto" || mode == "check";
   if (!ours && !proto)
     fail("mode must be ours, proto or check");
