@@ -27,12 +27,16 @@ expect_exit 0 "$BISECT" check oct.vtu
 expect_exit 0 "$BISECT" refine oct.vtu --region "$ROOT/data/regions/hypersphere.json" -n 5 -o oct5.vtu --quiet --slices 0,0.5,1
 expect_exit 0 "$BISECT" check oct5.vtu --against oct.vtu
 for t in 0 0.5 1; do expect_exit 0 "$BISECT" check oct5.t$t.vtu; done
-# A slab far thinner than the mesh: Qhull's own report (dozens of lines) is
-# not printed; the run ends on one line, nothing written (exit 2: the
-# triangulation fails the validation every result gets).
+# A slab a million times thinner than the mesh is triangulated (Qhull
+# without merging, src/tools/extrude.cpp) and passes the checks.
 "$BISECT" generate kuhn --dim 3 --cells 2 -o k3.vtu -q
+expect_exit 0 "$BISECT" extrude k3.vtu --slices 0,1e-6 -o thin6.vtu -q
+expect_exit 0 "$BISECT" check thin6.vtu
+# One 10^8 times thinner: Qhull's own report (dozens of lines) is not
+# printed; the run ends on one line, nothing written (exit 2: the
+# triangulation fails the validation every result gets).
 set +e
-"$BISECT" extrude k3.vtu --slices 0,1e-6 -o thin.vtu >"$WORK/out" 2>"$WORK/err"
+"$BISECT" extrude k3.vtu --slices 0,1e-8 -o thin.vtu >"$WORK/out" 2>"$WORK/err"
 rc=$?
 set -e
 [[ $rc == 2 || $rc == 1 ]] || { cat "$WORK/err" >&2; fail "thin slab: exit $rc"; }
