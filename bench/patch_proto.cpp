@@ -1,21 +1,31 @@
 // Prototype (issue 13, not the library): closure without global scans.
-// 3D, Maubach tuples only. A facet-neighbour array (4 cell ids per tet, the
-// neighbour across the facet opposite local vertex i) is kept current by
-// every bisection; bisecting a cell at its refinement edge e bisects the
-// whole ring of cells around e at once (recursive patch bisection), after
-// first bisecting, recursively (explicit stack), every ring cell whose own
-// refinement edge is not e. No midpoint table, no scans.
+// 3D and 4D, Maubach tuples only. A facet-neighbour array (Dim+1 cell ids
+// per cell, the neighbour across the facet opposite local vertex i) is kept
+// current by every bisection; bisecting a cell at its refinement edge e
+// bisects the whole patch of cells around e at once (recursive patch
+// bisection), after first bisecting, recursively (explicit stack), every
+// patch cell whose own refinement edge is not e. No midpoint table, no scans.
+//
+// 3D: the patch is a ring, walked both ways; the children's neighbours come
+// from hand-written index formulas. 4D: the cells around an edge are no
+// cycle; the patch is collected by a search through the Dim-1 facets of each
+// cell that hold the edge (a visited stamp per cell), and the children's
+// neighbours by generic facet matching (sorted ids of every child facet that
+// holds the midpoint, matched within the patch; the facet opposite the
+// midpoint takes the parent's outside neighbour, whose back pointer is fixed).
 //
 // Measured against bisect::refine() on the same Kuhn cube, the same
 // selection rule, one thread.
 //
-// Usage: patch_proto ours|proto|check K iterations [radius band]
+// Usage: patch_proto [--dim 4] ours|proto|check K iterations [radius band] [--region FILE]
 //        patch_proto ours|proto|check MESH.msh iterations
-//   K: the Kuhn cube [0,1]^3 with K^3 cubes (6 K^3 tets), selection: the
-//      vertex band around a sphere (Selection below);
-//   MESH.msh: read and validated as bisect_bench does, its tagged entities
-//      and data arrays dropped (the prototype carries none), selection: the
-//      hemisphere region of bisect_bench's 3D run (select_cells).
+//   K: the Kuhn cube [0,1]^Dim with K^Dim cubes (Dim! K^Dim cells),
+//      selection: the vertex band around a sphere (Selection below), or with
+//      --region FILE (a region spec, data/regions/*.json) the cells it touches;
+//   MESH.msh (3D only): read and validated as bisect_bench does, its tagged
+//      entities and data arrays dropped (the prototype carries none),
+//      selection: the hemisphere region of bisect_bench's 3D run (select_cells).
+//   --dim 4: the 4D Kuhn hypercube (pentatopes); default 3.
 //   ours:  bisect::refine() alone, timed per iteration, peak RSS
 //   proto: the prototype alone, timed per iteration, peak RSS
 //   PROTO_THREADS=N in the environment: the library's threads (default 1;
@@ -43,6 +53,7 @@
 #include <stdexcept>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 using namespace bisect;
@@ -71,18 +82,21 @@ double secs(Clock::time_point a, Clock::time_point b) {
 
 // The selection rule, the same for both meshes: a cell some vertex of which
 // lies within `band` of the sphere |p - c| = R, or whose vertices straddle
-// the sphere. c = (0.5, 0.5, 0.5).
-struct Selection {
+// the sphere. c = (0.5, ..., 0.5).
+template <int Dim> struct Selection {
   double radius = 0.3, band = 0.004;
   std::vector<CellId> operator()(const VertexId *cells, std::size_t nc,
                                  const double *coords) const {
+    constexpr int N = Dim + 1;
     std::vector<CellId> out;
     for (std::size_t c = 0; c < nc; ++c) {
       double lo = 1e300, hi = -1e300, near = 1e300;
-      for (int i = 0; i < 4; ++i) {
-        const double *p = coords + 3 * std::size_t(cells[4 * c + i]);
-        const double dx = p[0] - 0.5, dy = p[1] - 0.5, dz = p[2] - 0.5;
-        const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+      for (int i = 0; i < N; ++i) {
+        const double *p = coords + Dim * std::size_t(cells[N * c + i]);
+        double s = 0;
+        for (int k = 0; k < Dim; ++k)
+          s += (p[k] - 0.5) * (p[k] - 0.5);
+        const double d = std::sqrt(s);
         lo = std::min(lo, d);
         hi = std::max(hi, d);
         near = std::min(near, std::fabs(d - radius));
@@ -103,27 +117,66 @@ double tet_volume(const double *a, const double *b, const double *c, const doubl
          6.0;
 }
 
-double total_volume(const VertexId *cells, std::size_t nc, const double *coords) {
+// |det(x1 - x0, ..., x4 - x0)| / 4! by elimination with partial pivoting.
+double pentatope_volume(const double *const p[5]) {
+  double m[4][4];
+  for (int r = 0; r < 4; ++r)
+    for (int k = 0; k < 4; ++k)
+      m[r][k] = p[r + 1][k] - p[0][k];
+  double det = 1;
+  for (int col = 0; col < 4; ++col) {
+    int piv = col;
+    for (int r = col + 1; r < 4; ++r)
+      if (std::fabs(m[r][col]) > std::fabs(m[piv][col]))
+        piv = r;
+    if (m[piv][col] == 0)
+      return 0;
+    if (piv != col)
+      for (int k = 0; k < 4; ++k)
+        std::swap(m[piv][k], m[col][k]);
+    det *= m[col][col];
+    for (int r = col + 1; r < 4; ++r) {
+      const double f = m[r][col] / m[col][col];
+      for (int k = col; k < 4; ++k)
+        m[r][k] -= f * m[col][k];
+    }
+  }
+  return std::fabs(det) / 24.0;
+}
+
+template <int Dim> double total_volume(const VertexId *cells, std::size_t nc, const double *coords) {
   double s = 0;
-  for (std::size_t c = 0; c < nc; ++c)
-    s += tet_volume(coords + 3 * std::size_t(cells[4 * c]), coords + 3 * std::size_t(cells[4 * c + 1]),
-                    coords + 3 * std::size_t(cells[4 * c + 2]),
-                    coords + 3 * std::size_t(cells[4 * c + 3]));
+  if constexpr (Dim == 3) {
+    for (std::size_t c = 0; c < nc; ++c)
+      s += tet_volume(coords + 3 * std::size_t(cells[4 * c]), coords + 3 * std::size_t(cells[4 * c + 1]),
+                      coords + 3 * std::size_t(cells[4 * c + 2]),
+                      coords + 3 * std::size_t(cells[4 * c + 3]));
+  } else {
+    static_assert(Dim == 4);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const double *p[5];
+      for (int i = 0; i < 5; ++i)
+        p[i] = coords + 4 * std::size_t(cells[5 * c + i]);
+      s += pentatope_volume(p);
+    }
+  }
   return s;
 }
 
-// A cell's key independent of vertex numbering: its four points, sorted, hashed.
+// A cell's key independent of vertex numbering: its points, sorted, hashed.
+template <int Dim>
 std::vector<std::uint64_t> cell_hashes(const VertexId *cells, std::size_t nc, const double *coords) {
+  constexpr int N = Dim + 1;
   std::vector<std::uint64_t> h(nc);
   for (std::size_t c = 0; c < nc; ++c) {
-    std::array<std::array<double, 3>, 4> p;
-    for (int i = 0; i < 4; ++i)
-      for (int k = 0; k < 3; ++k)
-        p[i][k] = coords[3 * std::size_t(cells[4 * c + i]) + k];
+    std::array<std::array<double, Dim>, N> p;
+    for (int i = 0; i < N; ++i)
+      for (int k = 0; k < Dim; ++k)
+        p[i][k] = coords[Dim * std::size_t(cells[N * c + i]) + k];
     std::sort(p.begin(), p.end());
     std::uint64_t x = 0x9e3779b97f4a7c15ull;
-    for (int i = 0; i < 4; ++i)
-      for (int k = 0; k < 3; ++k) {
+    for (int i = 0; i < N; ++i)
+      for (int k = 0; k < Dim; ++k) {
         std::uint64_t b;
         std::memcpy(&b, &p[i][k], 8);
         x ^= b + 0x9e3779b97f4a7c15ull + (x << 6) + (x >> 2);
@@ -136,51 +189,73 @@ std::vector<std::uint64_t> cell_hashes(const VertexId *cells, std::size_t nc, co
   return h;
 }
 
-// A facet: its sorted ids, and who holds it (cell * 4 + local vertex opposite).
-struct Facet {
+// A facet: its sorted ids (3D: v0 v1 | v2; 4D: v0 v1 | v2 v3), and who holds
+// it (cell * (Dim+1) + local vertex opposite).
+template <int Dim> struct Facet {
+  using Low = std::conditional_t<Dim == 3, std::uint32_t, std::uint64_t>;
   std::uint64_t ab;
-  std::uint32_t c;
+  Low c;
   std::uint32_t who;
   bool operator<(const Facet &o) const { return ab != o.ab ? ab < o.ab : c < o.c; }
   bool same(const Facet &o) const { return ab == o.ab && c == o.c; }
+  void ids(VertexId *v) const {
+    v[0] = VertexId(ab >> 32);
+    v[1] = VertexId(ab);
+    if constexpr (Dim == 3) {
+      v[2] = c;
+    } else {
+      v[2] = VertexId(c >> 32);
+      v[3] = VertexId(c);
+    }
+  }
 };
 
-std::vector<Facet> sorted_facets(const VertexId *cells, std::size_t nc) {
-  std::vector<Facet> f(4 * nc);
+template <int Dim> std::vector<Facet<Dim>> sorted_facets(const VertexId *cells, std::size_t nc) {
+  constexpr int N = Dim + 1;
+  std::vector<Facet<Dim>> f(N * nc);
   for (std::size_t c = 0; c < nc; ++c)
-    for (int i = 0; i < 4; ++i) {
-      VertexId v[3];
+    for (int i = 0; i < N; ++i) {
+      VertexId v[Dim];
       int k = 0;
-      for (int j = 0; j < 4; ++j)
+      for (int j = 0; j < N; ++j)
         if (j != i)
-          v[k++] = cells[4 * c + j];
-      std::sort(v, v + 3);
-      f[4 * c + i] = Facet{std::uint64_t(v[0]) << 32 | v[1], v[2], std::uint32_t(4 * c + i)};
+          v[k++] = cells[N * c + j];
+      std::sort(v, v + Dim);
+      Facet<Dim> &g = f[N * c + i];
+      g.ab = std::uint64_t(v[0]) << 32 | v[1];
+      if constexpr (Dim == 3)
+        g.c = v[2];
+      else
+        g.c = std::uint64_t(v[2]) << 32 | v[3];
+      g.who = std::uint32_t(N * c + i);
     }
   std::sort(f.begin(), f.end());
   return f;
 }
 
-// The prototype: plain arrays, 3D, every cell a Maubach tuple with a tag.
-class Patch {
+// The prototype: plain arrays, every cell a Maubach tuple with a tag.
+template <int Dim> class Patch {
+  static constexpr int N = Dim + 1;
+
 public:
-  std::vector<VertexId> cells;       // 4 per tet
-  std::vector<std::uint8_t> tag;     // per tet, 1..3
-  std::vector<CellId> nb;            // 4 per tet: across the facet opposite local i, or kNoCell
-  std::vector<double> coords;        // 3 per vertex
-  std::vector<std::uint16_t> gen;    // per tet: bisections since the start (the tree, as ours)
+  std::vector<VertexId> cells;       // Dim+1 per cell
+  std::vector<std::uint8_t> tag;     // per cell, 1..Dim
+  std::vector<CellId> nb;            // Dim+1 per cell: across the facet opposite local i, or kNoCell
+  std::vector<double> coords;        // Dim per vertex
+  std::vector<std::uint16_t> gen;    // per cell: bisections since the start (the tree, as ours)
   std::vector<VertexId> parent_edge; // 2 per vertex (the tree, as ours)
   std::size_t bisections = 0, rings = 0, ring_cells = 0, pushes = 0, max_stack = 0;
-  std::size_t collects = 0, walked = 0; // ring walks, and the cells they visited
+  std::size_t collects = 0, walked = 0; // patch collections, and the cells they visited
+  std::size_t depth_sum = 0;            // the stack's depth at each patch bisection, summed
 
   std::size_t num_cells() const { return tag.size(); }
-  std::size_t num_vertices() const { return coords.size() / 3; }
+  std::size_t num_vertices() const { return coords.size() / Dim; }
 
   // The neighbours of the input (sorted facet keys), once.
   void build_neighbours() {
     const std::size_t nc = num_cells();
-    nb.assign(4 * nc, kNoCell);
-    std::vector<Facet> f = sorted_facets(cells.data(), nc);
+    nb.assign(N * nc, kNoCell);
+    std::vector<Facet<Dim>> f = sorted_facets<Dim>(cells.data(), nc);
     for (std::size_t i = 0; i < f.size();) {
       std::size_t j = i + 1;
       while (j < f.size() && f[j].same(f[i]))
@@ -188,8 +263,8 @@ public:
       if (j - i > 2)
         fail("input: a facet held by more than two cells");
       if (j - i == 2) {
-        nb[f[i].who] = f[i + 1].who / 4;
-        nb[f[i + 1].who] = f[i].who / 4;
+        nb[f[i].who] = f[i + 1].who / N;
+        nb[f[i + 1].who] = f[i].who / N;
       }
       i = j;
     }
@@ -206,8 +281,8 @@ public:
     const std::size_t want = nc0_ + 3 * selected.size();
     if (tag.capacity() < want) {
       const std::size_t cap = std::max(want, 2 * nc0_);
-      cells.reserve(4 * cap);
-      nb.reserve(4 * cap);
+      cells.reserve(N * cap);
+      nb.reserve(N * cap);
       tag.reserve(cap);
       gen.reserve(cap);
     }
@@ -221,19 +296,29 @@ private:
   std::vector<std::uint8_t> done_; // per input cell: bisected in this call
   std::vector<CellId> stack_, ring_;
   struct Old {
-    VertexId x[4];
-    CellId n[4];
+    VertexId x[N];
+    CellId n[N];
     int t;
   };
   std::vector<Old> old_;
+  std::vector<std::uint32_t> seen_; // 4D: per cell, the collection that last reached it
+  std::uint32_t stamp_ = 0;
+  // 4D: a child facet holding the midpoint: its other ids sorted, and who
+  // holds it (cell * N + local vertex opposite).
+  struct Half {
+    std::array<VertexId, Dim - 1> v;
+    std::uint32_t who;
+    bool operator<(const Half &o) const { return v < o.v; }
+  };
+  std::vector<Half> halves_;
 
   bool has_edge(CellId c, VertexId a, VertexId b) const {
-    const VertexId *x = &cells[4 * std::size_t(c)];
+    const VertexId *x = &cells[N * std::size_t(c)];
     const VertexId p = x[0], q = x[tag[c]];
     return (p == a && q == b) || (p == b && q == a);
   }
 
-  // The two local vertices of cell c that are not a or b.
+  // The two local vertices of cell c that are not a or b (3D).
   void others(CellId c, VertexId a, VertexId b, int &k1, int &k2) const {
     const VertexId *x = &cells[4 * std::size_t(c)];
     k1 = k2 = -1;
@@ -242,8 +327,9 @@ private:
         (k1 < 0 ? k1 : k2) = i;
   }
 
-  // ring_ = the cells around edge {a, b}, from c: walk one way through the
-  // facets holding the edge until back at c or at the boundary, then the other.
+  // 3D: ring_ = the cells around edge {a, b}, from c: walk one way through
+  // the facets holding the edge until back at c or at the boundary, then the
+  // other.
   void collect_ring(CellId c, VertexId a, VertexId b) {
     ring_.clear();
     ring_.push_back(c);
@@ -279,14 +365,49 @@ private:
     }
   }
 
+  // 4D (any Dim): ring_ = the cells around edge {a, b}, from c: a breadth-
+  // first search through the Dim-1 facets of each cell that hold the edge
+  // (those opposite a vertex other than a and b); ring_ is its queue.
+  void collect_patch(CellId c, VertexId a, VertexId b) {
+    ++collects;
+    if (seen_.size() < num_cells())
+      seen_.resize(std::max(num_cells(), tag.capacity()), 0);
+    if (++stamp_ == 0) { // wrapped: forget every stamp
+      std::fill(seen_.begin(), seen_.end(), 0);
+      stamp_ = 1;
+    }
+    ring_.clear();
+    ring_.push_back(c);
+    seen_[c] = stamp_;
+    for (std::size_t q = 0; q < ring_.size(); ++q) {
+      const CellId r = ring_[q];
+      const VertexId *x = &cells[N * std::size_t(r)];
+      const CellId *n = &nb[N * std::size_t(r)];
+      for (int i = 0; i < N; ++i) {
+        if (x[i] == a || x[i] == b)
+          continue;
+        const CellId o = n[i];
+        if (o != kNoCell && seen_[o] != stamp_) {
+          seen_[o] = stamp_;
+          ring_.push_back(o);
+        }
+      }
+      if (ring_.size() > 2000)
+        fail("patch around an edge larger than 2000 cells");
+    }
+  }
+
   void bisect_cell(CellId c0) {
     stack_.clear();
     stack_.push_back(c0);
     while (!stack_.empty()) {
       const CellId c = stack_.back();
-      const VertexId *x = &cells[4 * std::size_t(c)];
+      const VertexId *x = &cells[N * std::size_t(c)];
       const VertexId a = x[0], b = x[tag[c]];
-      collect_ring(c, a, b);
+      if constexpr (Dim == 3)
+        collect_ring(c, a, b);
+      else
+        collect_patch(c, a, b);
       CellId first_other = kNoCell;
       for (CellId r : ring_)
         if (!has_edge(r, a, b)) {
@@ -303,36 +424,49 @@ private:
         continue;
       }
       walked += ring_.size();
-      bisect_ring(a, b);
+      depth_sum += stack_.size();
+      if constexpr (Dim == 3)
+        bisect_ring(a, b);
+      else
+        bisect_patch(a, b);
       stack_.pop_back();
     }
   }
 
-  // Bisects every cell of ring_ (all refined at edge {a, b}) at one midpoint.
-  void bisect_ring(VertexId a, VertexId b) {
+  // The new vertex z = midpoint(a, b), and room for ring_.size() new cells;
+  // returns z, sets base (the first new cell) and old_ (the ring's cells).
+  VertexId open_ring(VertexId a, VertexId b, CellId &base) {
     const std::size_t m = ring_.size();
     const VertexId z = VertexId(num_vertices());
     {
-      const double *p = &coords[3 * std::size_t(a)], *q = &coords[3 * std::size_t(b)];
-      double mid[3];
-      for (int k = 0; k < 3; ++k)
+      const double *p = &coords[Dim * std::size_t(a)], *q = &coords[Dim * std::size_t(b)];
+      double mid[Dim];
+      for (int k = 0; k < Dim; ++k)
         mid[k] = 0.5 * (p[k] + q[k]);
-      coords.insert(coords.end(), mid, mid + 3);
+      coords.insert(coords.end(), mid, mid + Dim);
       parent_edge.push_back(a);
       parent_edge.push_back(b);
     }
-    const CellId base = CellId(num_cells());
-    cells.resize(cells.size() + 4 * m);
-    nb.resize(nb.size() + 4 * m);
+    base = CellId(num_cells());
+    cells.resize(cells.size() + N * m);
+    nb.resize(nb.size() + N * m);
     tag.resize(tag.size() + m);
     gen.resize(gen.size() + m);
     old_.resize(m);
     for (std::size_t i = 0; i < m; ++i) {
       const CellId r = ring_[i];
-      std::memcpy(old_[i].x, &cells[4 * std::size_t(r)], sizeof old_[i].x);
-      std::memcpy(old_[i].n, &nb[4 * std::size_t(r)], sizeof old_[i].n);
+      std::memcpy(old_[i].x, &cells[N * std::size_t(r)], sizeof old_[i].x);
+      std::memcpy(old_[i].n, &nb[N * std::size_t(r)], sizeof old_[i].n);
       old_[i].t = tag[r];
     }
+    return z;
+  }
+
+  // 3D: bisects every cell of ring_ (all refined at edge {a, b}) at one midpoint.
+  void bisect_ring(VertexId a, VertexId b) {
+    const std::size_t m = ring_.size();
+    CellId base;
+    const VertexId z = open_ring(a, b, base);
     // The child of ring cell j that holds end v: child 1 (its slot) holds its x0.
     auto child_with = [&](CellId n, VertexId v) -> CellId {
       for (std::size_t j = 0; j < m; ++j)
@@ -386,12 +520,104 @@ private:
     ++rings;
     ring_cells += m;
   }
+
+  // 4D (any Dim): bisects every cell of ring_ (all refined at edge {a, b})
+  // at one midpoint z; the children's neighbours by facet matching. A
+  // child's facet opposite z is the parent's facet opposite the end the child
+  // lacks: the parent's outside neighbour there (its back pointer fixed if the
+  // child is not in the parent's slot). Every other facet holds z: keyed by
+  // its other ids, sorted, matched within the patch; one left unmatched is on
+  // the boundary (checked: the parent's facet it halves has no neighbour).
+  void bisect_patch(VertexId a, VertexId b) {
+    const std::size_t m = ring_.size();
+    CellId base;
+    const VertexId z = open_ring(a, b, base);
+    halves_.clear();
+    for (std::size_t i = 0; i < m; ++i) {
+      const CellId s = ring_[i], s2 = CellId(base + i);
+      const Old &o = old_[i];
+      const int d = o.t;
+      maubach_children<Dim>(o.x, d, z, &cells[N * std::size_t(s)], &cells[N * std::size_t(s2)]);
+      const std::uint8_t t = std::uint8_t(maubach_child_tag(d, Dim));
+      tag[s] = tag[s2] = t;
+      gen[s2] = ++gen[s];
+      for (const CellId ch : {s, s2}) {
+        const VertexId *y = &cells[N * std::size_t(ch)];
+        CellId *n = &nb[N * std::size_t(ch)];
+        for (int k = 0; k < N; ++k) {
+          if (y[k] == z) {
+            // The end the child lacks, and the parent's facet opposite it.
+            bool has_a = false;
+            for (int j = 0; j < N; ++j)
+              has_a |= y[j] == a;
+            const VertexId lacks = has_a ? b : a;
+            int j = 0;
+            while (o.x[j] != lacks)
+              ++j;
+            const CellId out = o.n[j];
+            n[k] = out;
+            if (out != kNoCell && ch != s) {
+              CellId *back = &nb[N * std::size_t(out)];
+              int q = 0;
+              while (q < N && back[q] != s)
+                ++q;
+              if (q == N)
+                fail("outside neighbour does not point back");
+              back[q] = ch;
+            }
+            continue;
+          }
+          Half h;
+          int w = 0;
+          for (int j = 0; j < N; ++j)
+            if (j != k && y[j] != z)
+              h.v[w++] = y[j];
+          std::sort(h.v.begin(), h.v.end());
+          h.who = std::uint32_t(N * std::size_t(ch) + k);
+          halves_.push_back(h);
+        }
+      }
+      if (s < nc0_)
+        done_[s] = 1;
+    }
+    std::sort(halves_.begin(), halves_.end());
+    for (std::size_t i = 0; i < halves_.size();) {
+      if (i + 1 < halves_.size() && halves_[i + 1].v == halves_[i].v) {
+        if (i + 2 < halves_.size() && halves_[i + 2].v == halves_[i].v)
+          fail("a facet held by three children");
+        nb[halves_[i].who] = halves_[i + 1].who / N;
+        nb[halves_[i + 1].who] = halves_[i].who / N;
+        i += 2;
+        continue;
+      }
+      // Unmatched: the parent's facet opposite the same vertex must be on
+      // the boundary. The child's cell came from ring_ slot or base + j.
+      const std::uint32_t who = halves_[i].who;
+      const CellId ch = who / N;
+      const VertexId v = cells[who];
+      const std::size_t j = ch >= base ? std::size_t(ch - base)
+                                       : std::size_t(std::find(ring_.begin(), ring_.end(), ch) -
+                                                     ring_.begin());
+      const Old &o = old_[j];
+      int p = 0;
+      while (p < N && o.x[p] != v)
+        ++p;
+      if (p == N || o.n[p] != kNoCell)
+        fail("a child facet holding the midpoint is unmatched inside the mesh");
+      nb[who] = kNoCell;
+      ++i;
+    }
+    bisections += m;
+    ++rings;
+    ring_cells += m;
+  }
 };
 
 // Checks of the prototype's mesh after an iteration (fails loudly).
-void check_patch(const Patch &p, double volume0, bool cube) {
+template <int Dim> void check_patch(const Patch<Dim> &p, double volume0, bool cube) {
+  constexpr int N = Dim + 1;
   const std::size_t nc = p.num_cells();
-  std::vector<Facet> f = sorted_facets(p.cells.data(), nc);
+  std::vector<Facet<Dim>> f = sorted_facets<Dim>(p.cells.data(), nc);
   std::size_t boundary = 0, interior = 0;
   for (std::size_t i = 0; i < f.size();) {
     std::size_t j = i + 1;
@@ -405,17 +631,17 @@ void check_patch(const Patch &p, double volume0, bool cube) {
         fail("neighbour across a boundary facet");
     } else {
       ++interior;
-      if (p.nb[f[i].who] != f[i + 1].who / 4 || p.nb[f[i + 1].who] != f[i].who / 4)
-        fail("neighbour array wrong: cells " + std::to_string(f[i].who / 4) + " and " +
-             std::to_string(f[i + 1].who / 4) + " share a facet");
+      if (p.nb[f[i].who] != f[i + 1].who / N || p.nb[f[i + 1].who] != f[i].who / N)
+        fail("neighbour array wrong: cells " + std::to_string(f[i].who / N) + " and " +
+             std::to_string(f[i + 1].who / N) + " share a facet");
     }
     i = j;
   }
   // Every facet accounted for: with the two passes above, nb is symmetric
   // and each entry names the cell that really shares that facet.
-  if (boundary + 2 * interior != 4 * nc)
+  if (boundary + 2 * interior != N * nc)
     fail("facet count");
-  const double v = total_volume(p.cells.data(), nc, p.coords.data());
+  const double v = total_volume<Dim>(p.cells.data(), nc, p.coords.data());
   if (std::fabs(v - volume0) > 1e-9 * volume0)
     fail("volume changed: " + std::to_string(v));
   // Conformity also means no vertex in the interior of a facet or an edge; a
@@ -425,12 +651,14 @@ void check_patch(const Patch &p, double volume0, bool cube) {
     while (j < f.size() && f[j].same(f[i]))
       ++j;
     if (cube && j - i == 1) {
-      const VertexId ids[3] = {VertexId(f[i].ab >> 32), VertexId(f[i].ab), f[i].c};
+      VertexId ids[Dim];
+      f[i].ids(ids);
       bool on_face = false;
-      for (int k = 0; k < 3 && !on_face; ++k) {
-        const double c0 = p.coords[3 * std::size_t(ids[0]) + k];
-        on_face = (c0 == 0.0 || c0 == 1.0) && p.coords[3 * std::size_t(ids[1]) + k] == c0 &&
-                  p.coords[3 * std::size_t(ids[2]) + k] == c0;
+      for (int k = 0; k < Dim && !on_face; ++k) {
+        const double c0 = p.coords[Dim * std::size_t(ids[0]) + k];
+        on_face = c0 == 0.0 || c0 == 1.0;
+        for (int q = 1; q < Dim && on_face; ++q)
+          on_face = p.coords[Dim * std::size_t(ids[q]) + k] == c0;
       }
       if (!on_face)
         fail("a facet held by one cell inside the cube (hanging)");
@@ -439,11 +667,13 @@ void check_patch(const Patch &p, double volume0, bool cube) {
   }
 }
 
-Mesh make_input(const std::string &input) {
+template <int Dim> Mesh make_input(const std::string &input) {
   Mesh m;
   if (input.find_first_not_of("0123456789") == std::string::npos) {
-    m = generate_kuhn(3, std::atoi(input.c_str()));
+    m = generate_kuhn(Dim, std::atoi(input.c_str()));
   } else {
+    if (Dim != 3)
+      fail("a mesh file only in 3D");
     m = read_mesh(input);
     prepare_input(m, input);
     m.entities.clear();
@@ -455,13 +685,14 @@ Mesh make_input(const std::string &input) {
   }
   mark_mesh(m, Marking::Index);
   for (std::size_t c = 0; c < m.num_cells(); ++c)
-    if (m.stage[c] != Stage::Maubach || m.tag[c] < 1 || m.tag[c] > 3)
-      fail("input cell " + std::to_string(c) + " is not a Maubach tuple");
+    if (m.stage[c] != Stage::Maubach || m.tag[c] < 1 || m.tag[c] > Dim)
+      fail("input cell " + std::to_string(c) + " is not a Maubach tuple (stage " +
+           std::to_string(int(m.stage[c])) + ", tag " + std::to_string(int(m.tag[c])) + ")");
   return m;
 }
 
-Patch make_patch(const Mesh &m) {
-  Patch p;
+template <int Dim> Patch<Dim> make_patch(const Mesh &m) {
+  Patch<Dim> p;
   p.cells = m.cells;
   p.tag = m.tag;
   p.coords = m.coords;
@@ -470,48 +701,41 @@ Patch make_patch(const Mesh &m) {
   return p;
 }
 
-} // namespace
-
-int main(int argc, char **argv) {
-  if (argc < 4) {
-    std::fprintf(stderr, "usage: patch_proto ours|proto|check K|MESH.msh iterations [radius band]\n");
-    return 1;
-  }
-  const std::string mode = argv[1];
-  const std::string input = argv[2];
+template <int Dim>
+int run(const std::string &mode, const std::string &input, int iterations,
+        const Selection<Dim> &select, const std::string &region_file, int threads) {
+  constexpr int N = Dim + 1;
+  const char *word = Dim == 3 ? "tets" : "pentatopes";
   const bool cube = input.find_first_not_of("0123456789") == std::string::npos;
-  const int iterations = std::atoi(argv[3]);
-  Selection select;
-  if (argc > 4)
-    select.radius = std::atof(argv[4]);
-  if (argc > 5)
-    select.band = std::atof(argv[5]);
-  set_threads(std::getenv("PROTO_THREADS") ? std::atoi(std::getenv("PROTO_THREADS")) : 1);
   const bool ours = mode == "ours" || mode == "check", proto = mode == "proto" || mode == "check";
   if (!ours && !proto)
     fail("mode must be ours, proto or check");
 
-  Mesh mesh = make_input(input);
-  // The file's selection: bisect_bench's 3D region (one per implementation).
+  Mesh mesh = make_input<Dim>(input);
+  // The file's selection: bisect_bench's 3D region (one per implementation),
+  // or the region file's.
   const char *hemisphere = R"({"type":"hemisphere","center":[0.5,0.5,0.5],"radius":1,)"
                            R"("normal":[1,0,0],"offset":0.5})";
   std::unique_ptr<Region> region_ours, region_proto;
-  if (!cube) {
+  if (!region_file.empty()) {
+    region_ours = read_region(region_file, Dim);
+    region_proto = read_region(region_file, Dim);
+  } else if (!cube) {
     region_ours = parse_region(hemisphere, 3, "bench");
     region_proto = parse_region(hemisphere, 3, "bench");
   }
   // The selections, outside the timed refinement. The prototype's arrays are
   // lent to a Mesh for select_cells (swapped, not copied: no memory).
   auto select_ours = [&]() {
-    return cube ? select(mesh.cells.data(), mesh.num_cells(), mesh.coords.data())
-                : select_cells(mesh, *region_ours);
+    return !region_ours ? select(mesh.cells.data(), mesh.num_cells(), mesh.coords.data())
+                        : select_cells(mesh, *region_ours);
   };
   const std::size_t nc_in = mesh.num_cells();
-  const double volume0 = total_volume(mesh.cells.data(), nc_in, mesh.coords.data());
-  Patch patch;
+  const double volume0 = total_volume<Dim>(mesh.cells.data(), nc_in, mesh.coords.data());
+  Patch<Dim> patch;
   double t_build = 0;
   if (proto) {
-    patch = make_patch(mesh);
+    patch = make_patch<Dim>(mesh);
     const auto t0 = Clock::now();
     patch.build_neighbours();
     t_build = secs(t0, Clock::now());
@@ -519,10 +743,10 @@ int main(int argc, char **argv) {
       mesh = Mesh{};
   }
   auto select_proto = [&]() {
-    if (cube)
+    if (!region_proto)
       return select(patch.cells.data(), patch.num_cells(), patch.coords.data());
     Mesh view;
-    view.dim = 3;
+    view.dim = Dim;
     view.cells.swap(patch.cells);
     view.coords.swap(patch.coords);
     std::vector<CellId> sel = select_cells(view, *region_proto);
@@ -531,15 +755,20 @@ int main(int argc, char **argv) {
     return sel;
   };
   const long rss0 = proc_status_kb("VmRSS:");
-  if (cube)
-    std::printf("mode %s, Kuhn k=%s: %zu tets, sphere r=%g band=%g, %d iterations, 1 thread\n",
-                mode.c_str(), input.c_str(), nc_in, select.radius, select.band, iterations);
+  if (!region_file.empty())
+    std::printf("mode %s, %dD Kuhn k=%s: %zu %s, region %s, %d iterations, %d thread(s) for refine()\n",
+                mode.c_str(), Dim, input.c_str(), nc_in, word, region_file.c_str(), iterations,
+                threads);
+  else if (cube)
+    std::printf("mode %s, %sKuhn k=%s: %zu %s, sphere r=%g band=%g, %d iterations, %d thread(s) for refine()\n",
+                mode.c_str(), Dim == 3 ? "" : "4D ", input.c_str(), nc_in, word, select.radius,
+                select.band, iterations, threads);
   else
-    std::printf("mode %s, %s: %zu tets, bisect_bench's hemisphere, %d iterations, 1 thread\n",
-                mode.c_str(), input.c_str(), nc_in, iterations);
+    std::printf("mode %s, %s: %zu tets, bisect_bench's hemisphere, %d iterations, %d thread(s) for refine()\n",
+                mode.c_str(), input.c_str(), nc_in, iterations, threads);
   if (proto)
-    std::printf("neighbour array built in %.4f s (%.1f M tets/s)\n", t_build,
-                1e-6 * nc_in / t_build);
+    std::printf("neighbour array built in %.4f s (%.1f M %s/s)\n", t_build, 1e-6 * nc_in / t_build,
+                word);
   std::printf("%4s %10s %10s %9s %9s %10s %9s\n", "it", "selected", "cells", "bisect", "secs",
               "Mgen/s", "check");
   double t_ours = 0, t_proto = 0;
@@ -562,7 +791,8 @@ int main(int argc, char **argv) {
     }
     if (proto) {
       const auto sel = select_proto();
-      const std::size_t b0 = patch.bisections, rings0 = patch.rings, push0 = patch.pushes;
+      const std::size_t b0 = patch.bisections, rings0 = patch.rings, push0 = patch.pushes,
+                        depth0 = patch.depth_sum;
       const auto t0 = Clock::now();
       patch.refine(sel);
       const double t = secs(t0, Clock::now());
@@ -575,31 +805,35 @@ int main(int argc, char **argv) {
         if (cells_proto != cells_ours)
           fail("iteration " + std::to_string(it) + ": cell counts differ, ours " +
                std::to_string(cells_ours) + ", prototype " + std::to_string(cells_proto));
-        check_patch(patch, volume0, cube);
-        if (cell_hashes(mesh.cells.data(), mesh.num_cells(), mesh.coords.data()) !=
-            cell_hashes(patch.cells.data(), patch.num_cells(), patch.coords.data()))
+        check_patch<Dim>(patch, volume0, cube);
+        if (cell_hashes<Dim>(mesh.cells.data(), mesh.num_cells(), mesh.coords.data()) !=
+            cell_hashes<Dim>(patch.cells.data(), patch.num_cells(), patch.coords.data()))
           fail("iteration " + std::to_string(it) + ": the two meshes' cells differ");
         verdict = "ok";
       }
+      const double nr = double(patch.rings - rings0);
       std::printf("%4d %10zu %10zu %9zu %9.4f %10.2f %9s  proto (%zu rings, mean %.2f cells, "
-                  "%zu pushes, max stack %zu)\n",
+                  "%zu pushes, max stack %zu, mean depth %.2f)\n",
                   it, sel.size(), cells_proto, b, t, 2e-6 * b / t, verdict,
-                  patch.rings - rings0, double(b) / double(patch.rings - rings0),
-                  patch.pushes - push0, patch.max_stack);
+                  patch.rings - rings0, double(b) / nr, patch.pushes - push0, patch.max_stack,
+                  double(patch.depth_sum - depth0) / nr);
     }
     std::fflush(stdout);
   }
   const long hwm = proc_status_kb("VmHWM:"); // before the rebuild below
   const double cells = double(ours ? mesh.num_cells() : patch.num_cells());
   if (ours)
-    std::printf("TOTAL ours:  %.4f s, %zu bisections, %.2f M generated tets/s\n", t_ours, b_ours,
-                2e-6 * b_ours / t_ours);
+    std::printf("TOTAL ours:  %.4f s, %zu bisections, %.2f M generated %s/s\n", t_ours, b_ours,
+                2e-6 * b_ours / t_ours, word);
   if (proto) {
-    std::printf("TOTAL proto: %.4f s, %zu bisections, %.2f M generated tets/s (+ %.4f s "
+    std::printf("TOTAL proto: %.4f s, %zu bisections, %.2f M generated %s/s (+ %.4f s "
                 "neighbour build once)\n",
-                t_proto, b_proto, 2e-6 * b_proto / t_proto, t_build);
-    std::printf("proto: %zu ring walks visiting %zu cells for %zu rings of %zu cells (%zu pushes)\n",
-                patch.collects, patch.walked, patch.rings, patch.ring_cells, patch.pushes);
+                t_proto, b_proto, 2e-6 * b_proto / t_proto, word, t_build);
+    std::printf("proto: %zu ring walks visiting %zu cells for %zu rings of %zu cells (%zu pushes); "
+                "mean ring %.2f cells, mean stack depth %.2f, max %zu\n",
+                patch.collects, patch.walked, patch.rings, patch.ring_cells, patch.pushes,
+                double(patch.ring_cells) / double(patch.rings),
+                double(patch.depth_sum) / double(patch.rings), patch.max_stack);
     // What building the array from scratch would cost on the result (a
     // refine() that did not keep it between calls), and a last check: the
     // array kept current equals the one built.
@@ -609,20 +843,62 @@ int main(int argc, char **argv) {
     const double t_rebuild = secs(t0, Clock::now());
     if (patch.nb != kept)
       fail("the neighbour array kept current differs from one built from the result");
-    std::printf("neighbour array of the result built from scratch: %.4f s (%.1f M tets/s); equal "
+    std::printf("neighbour array of the result built from scratch: %.4f s (%.1f M %s/s); equal "
                 "to the one kept current\n",
-                t_rebuild, 1e-6 * patch.num_cells() / t_rebuild);
+                t_rebuild, 1e-6 * patch.num_cells() / t_rebuild, word);
     const std::size_t nc = patch.num_cells(), nv = patch.num_vertices();
+    const double per_cell = 4.0 * N + 1 + 4.0 * N + 2, per_vertex = 8.0 * Dim + 8;
     std::printf("proto arrays (size): cells %zu B, tag %zu, nb %zu, gen %zu, coords %zu, "
-                "parent_edge %zu = %.1f B/tet; capacity %.1f B/tet\n",
-                16 * nc, nc, 16 * nc, 2 * nc, 24 * nv, 8 * nv,
-                (34.0 * nc + 32.0 * nv) / nc,
+                "parent_edge %zu = %.1f B/cell; capacity %.1f B/cell\n",
+                4 * N * nc, nc, 4 * N * nc, 2 * nc, 8 * Dim * nv, 8 * nv,
+                (per_cell * nc + per_vertex * nv) / nc,
                 (4.0 * patch.cells.capacity() + patch.tag.capacity() + 4.0 * patch.nb.capacity() +
                  2.0 * patch.gen.capacity() + 8.0 * patch.coords.capacity() +
                  4.0 * patch.parent_edge.capacity()) /
                     nc);
   }
-  std::printf("peak RSS (before that rebuild) %.1f MiB = %.1f B/tet; above the pre-refinement RSS %.1f B/tet\n",
+  std::printf("peak RSS (before that rebuild) %.1f MiB = %.1f B/cell; above the pre-refinement RSS %.1f B/cell\n",
               hwm / 1024.0, hwm * 1024.0 / cells, (hwm - rss0) * 1024.0 / cells);
   return 0;
+}
+
+} // namespace
+
+int main(int argc, char **argv) {
+  std::vector<std::string> args;
+  int dim = 3;
+  std::string region_file;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--dim" && i + 1 < argc)
+      dim = std::atoi(argv[++i]);
+    else if (a == "--region" && i + 1 < argc)
+      region_file = argv[++i];
+    else
+      args.push_back(a);
+  }
+  if (args.size() < 3 || (dim != 3 && dim != 4)) {
+    std::fprintf(stderr, "usage: patch_proto [--dim 4] ours|proto|check K|MESH.msh iterations "
+                         "[radius band] [--region FILE]\n");
+    return 1;
+  }
+  const std::string mode = args[0];
+  const std::string input = args[1];
+  const int iterations = std::atoi(args[2].c_str());
+  const int threads = std::getenv("PROTO_THREADS") ? std::atoi(std::getenv("PROTO_THREADS")) : 1;
+  set_threads(threads);
+  if (dim == 3) {
+    Selection<3> select;
+    if (args.size() > 3)
+      select.radius = std::atof(args[3].c_str());
+    if (args.size() > 4)
+      select.band = std::atof(args[4].c_str());
+    return run<3>(mode, input, iterations, select, region_file, threads);
+  }
+  Selection<4> select;
+  if (args.size() > 3)
+    select.radius = std::atof(args[3].c_str());
+  if (args.size() > 4)
+    select.band = std::atof(args[4].c_str());
+  return run<4>(mode, input, iterations, select, region_file, threads);
 }
