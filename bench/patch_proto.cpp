@@ -30,6 +30,8 @@
 //   proto: the prototype alone, timed per iteration, peak RSS
 //   PROTO_THREADS=N in the environment: the library's threads (default 1;
 //          the prototype itself is serial).
+//   PROTO_MARKING=sorted: the sorted marking instead of index (in 4D index
+//          marking gives Stage 1 cells, which the prototype cannot bisect).
 //   check: both in one process; after every iteration compares cell counts
 //          and the cells (by their vertices' coordinates), and checks the
 //          prototype's conformity (facets sorted), volume and neighbours.
@@ -683,7 +685,14 @@ template <int Dim> Mesh make_input(const std::string &input) {
     if (m.dim != 3)
       fail("not a 3D mesh");
   }
-  mark_mesh(m, Marking::Index);
+  // Index marking (the brief's). PROTO_MARKING=sorted: the sorted rule
+  // ((x0 < ... < xn)_n, ALGORITHMS.md §4), Maubach from the start in 4D too,
+  // where index marking puts every pentatope in Stage 1.
+  const char *mk = std::getenv("PROTO_MARKING");
+  const bool sorted = mk && std::string(mk) == "sorted";
+  if (mk && !sorted && std::string(mk) != "index")
+    fail("PROTO_MARKING must be index or sorted");
+  mark_mesh(m, sorted ? Marking::Sorted : Marking::Index);
   for (std::size_t c = 0; c < m.num_cells(); ++c)
     if (m.stage[c] != Stage::Maubach || m.tag[c] < 1 || m.tag[c] > Dim)
       fail("input cell " + std::to_string(c) + " is not a Maubach tuple (stage " +
