@@ -52,8 +52,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <stdexcept>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -146,13 +146,14 @@ double pentatope_volume(const double *const p[5]) {
   return std::fabs(det) / 24.0;
 }
 
-template <int Dim> double total_volume(const VertexId *cells, std::size_t nc, const double *coords) {
+template <int Dim>
+double total_volume(const VertexId *cells, std::size_t nc, const double *coords) {
   double s = 0;
   if constexpr (Dim == 3) {
     for (std::size_t c = 0; c < nc; ++c)
-      s += tet_volume(coords + 3 * std::size_t(cells[4 * c]), coords + 3 * std::size_t(cells[4 * c + 1]),
-                      coords + 3 * std::size_t(cells[4 * c + 2]),
-                      coords + 3 * std::size_t(cells[4 * c + 3]));
+      s += tet_volume(
+          coords + 3 * std::size_t(cells[4 * c]), coords + 3 * std::size_t(cells[4 * c + 1]),
+          coords + 3 * std::size_t(cells[4 * c + 2]), coords + 3 * std::size_t(cells[4 * c + 3]));
   } else {
     static_assert(Dim == 4);
     for (std::size_t c = 0; c < nc; ++c) {
@@ -167,7 +168,8 @@ template <int Dim> double total_volume(const VertexId *cells, std::size_t nc, co
 
 // A cell's key independent of vertex numbering: its points, sorted, hashed.
 template <int Dim>
-std::vector<std::uint64_t> cell_hashes(const VertexId *cells, std::size_t nc, const double *coords) {
+std::vector<std::uint64_t> cell_hashes(const VertexId *cells, std::size_t nc,
+                                       const double *coords) {
   constexpr int N = Dim + 1;
   std::vector<std::uint64_t> h(nc);
   for (std::size_t c = 0; c < nc; ++c) {
@@ -240,11 +242,11 @@ template <int Dim> class Patch {
   static constexpr int N = Dim + 1;
 
 public:
-  std::vector<VertexId> cells;       // Dim+1 per cell
-  std::vector<std::uint8_t> tag;     // per cell, 1..Dim
-  std::vector<CellId> nb;            // Dim+1 per cell: across the facet opposite local i, or kNoCell
-  std::vector<double> coords;        // Dim per vertex
-  std::vector<std::uint16_t> gen;    // per cell: bisections since the start (the tree, as ours)
+  std::vector<VertexId> cells;    // Dim+1 per cell
+  std::vector<std::uint8_t> tag;  // per cell, 1..Dim
+  std::vector<CellId> nb;         // Dim+1 per cell: across the facet opposite local i, or kNoCell
+  std::vector<double> coords;     // Dim per vertex
+  std::vector<std::uint16_t> gen; // per cell: bisections since the start (the tree, as ours)
   std::vector<VertexId> parent_edge; // 2 per vertex (the tree, as ours)
   std::size_t bisections = 0, rings = 0, ring_cells = 0, pushes = 0, max_stack = 0;
   std::size_t collects = 0, walked = 0; // patch collections, and the cells they visited
@@ -597,9 +599,9 @@ private:
       const std::uint32_t who = halves_[i].who;
       const CellId ch = who / N;
       const VertexId v = cells[who];
-      const std::size_t j = ch >= base ? std::size_t(ch - base)
-                                       : std::size_t(std::find(ring_.begin(), ring_.end(), ch) -
-                                                     ring_.begin());
+      const std::size_t j =
+          ch >= base ? std::size_t(ch - base)
+                     : std::size_t(std::find(ring_.begin(), ring_.end(), ch) - ring_.begin());
       const Old &o = old_[j];
       int p = 0;
       while (p < N && o.x[p] != v)
@@ -765,15 +767,17 @@ int run(const std::string &mode, const std::string &input, int iterations,
   };
   const long rss0 = proc_status_kb("VmRSS:");
   if (!region_file.empty())
-    std::printf("mode %s, %dD Kuhn k=%s: %zu %s, region %s, %d iterations, %d thread(s) for refine()\n",
-                mode.c_str(), Dim, input.c_str(), nc_in, word, region_file.c_str(), iterations,
-                threads);
+    std::printf(
+        "mode %s, %dD Kuhn k=%s: %zu %s, region %s, %d iterations, %d thread(s) for refine()\n",
+        mode.c_str(), Dim, input.c_str(), nc_in, word, region_file.c_str(), iterations, threads);
   else if (cube)
-    std::printf("mode %s, %sKuhn k=%s: %zu %s, sphere r=%g band=%g, %d iterations, %d thread(s) for refine()\n",
+    std::printf("mode %s, %sKuhn k=%s: %zu %s, sphere r=%g band=%g, %d iterations, %d thread(s) "
+                "for refine()\n",
                 mode.c_str(), Dim == 3 ? "" : "4D ", input.c_str(), nc_in, word, select.radius,
                 select.band, iterations, threads);
   else
-    std::printf("mode %s, %s: %zu tets, bisect_bench's hemisphere, %d iterations, %d thread(s) for refine()\n",
+    std::printf("mode %s, %s: %zu tets, bisect_bench's hemisphere, %d iterations, %d thread(s) for "
+                "refine()\n",
                 mode.c_str(), input.c_str(), nc_in, iterations, threads);
   if (proto)
     std::printf("neighbour array built in %.4f s (%.1f M %s/s)\n", t_build, 1e-6 * nc_in / t_build,
@@ -823,8 +827,8 @@ int run(const std::string &mode, const std::string &input, int iterations,
       const double nr = double(patch.rings - rings0);
       std::printf("%4d %10zu %10zu %9zu %9.4f %10.2f %9s  proto (%zu rings, mean %.2f cells, "
                   "%zu pushes, max stack %zu, mean depth %.2f)\n",
-                  it, sel.size(), cells_proto, b, t, 2e-6 * b / t, verdict,
-                  patch.rings - rings0, double(b) / nr, patch.pushes - push0, patch.max_stack,
+                  it, sel.size(), cells_proto, b, t, 2e-6 * b / t, verdict, patch.rings - rings0,
+                  double(b) / nr, patch.pushes - push0, patch.max_stack,
                   double(patch.depth_sum - depth0) / nr);
     }
     std::fflush(stdout);
@@ -866,7 +870,8 @@ int run(const std::string &mode, const std::string &input, int iterations,
                  4.0 * patch.parent_edge.capacity()) /
                     nc);
   }
-  std::printf("peak RSS (before that rebuild) %.1f MiB = %.1f B/cell; above the pre-refinement RSS %.1f B/cell\n",
+  std::printf("peak RSS (before that rebuild) %.1f MiB = %.1f B/cell; above the pre-refinement RSS "
+              "%.1f B/cell\n",
               hwm / 1024.0, hwm * 1024.0 / cells, (hwm - rss0) * 1024.0 / cells);
   return 0;
 }
