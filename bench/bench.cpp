@@ -3,6 +3,7 @@
 // quality measurement timed apart) and peak memory per cell.
 //
 // Usage: bisect_bench [ball.msh] [iterations3d=40] [iterations4d=25]
+#include "bench_util.hpp"
 #include "bisect/check.hpp"
 #include "bisect/generate.hpp"
 #include "bisect/io.hpp"
@@ -19,23 +20,11 @@
 #include <thread>
 
 using namespace bisect;
-using Clock = std::chrono::steady_clock;
+using bisect::bench::Clock;
+using bisect::bench::proc_status_kb;
+using bisect::bench::secs;
 
 namespace {
-
-// Resident set size figures from /proc (kB).
-long proc_status_kb(const char *field) {
-  std::ifstream f("/proc/self/status");
-  std::string line;
-  while (std::getline(f, line))
-    if (line.rfind(field, 0) == 0)
-      return std::atol(line.c_str() + std::string(field).size());
-  return -1;
-}
-
-double secs(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
 
 void run(const char *name, Mesh mesh, Marking marking, const std::string &region_json,
          int iterations) {

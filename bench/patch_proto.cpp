@@ -35,6 +35,7 @@
 //   check: both in one process; after every iteration compares cell counts
 //          and the cells (by their vertices' coordinates), and checks the
 //          prototype's conformity (facets sorted), volume and neighbours.
+#include "bench_util.hpp"
 #include "bisect/check.hpp"
 #include "bisect/generate.hpp"
 #include "bisect/io.hpp"
@@ -59,22 +60,11 @@
 #include <vector>
 
 using namespace bisect;
-using Clock = std::chrono::steady_clock;
+using bisect::bench::Clock;
+using bisect::bench::proc_status_kb;
+using bisect::bench::secs;
 
 namespace {
-
-long proc_status_kb(const char *field) {
-  std::ifstream f("/proc/self/status");
-  std::string line;
-  while (std::getline(f, line))
-    if (line.rfind(field, 0) == 0)
-      return std::atol(line.c_str() + std::string(field).size());
-  return -1;
-}
-
-double secs(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
 
 [[noreturn]] void fail(const std::string &what) {
   std::fprintf(stderr, "patch_proto: FAILED: %s\n", what.c_str());
@@ -237,6 +227,18 @@ template <int Dim> std::vector<Facet<Dim>> sorted_facets(const VertexId *cells, 
   return f;
 }
 
+// f(i, j) for each run [i, j) of equal facets in sorted f (one facet, held
+// by j - i cells).
+template <int Dim, class F> void for_each_facet_run(const std::vector<Facet<Dim>> &f, F &&fn) {
+  for (std::size_t i = 0; i < f.size();) {
+    std::size_t j = i + 1;
+    while (j < f.size() && f[j].same(f[i]))
+      ++j;
+    fn(i, j);
+    i = j;
+  }
+}
+
 // The prototype: plain arrays, every cell a Maubach tuple with a tag.
 template <int Dim> class Patch {
   static constexpr int N = Dim + 1;
@@ -259,19 +261,15 @@ public:
   void build_neighbours() {
     const std::size_t nc = num_cells();
     nb.assign(N * nc, kNoCell);
-    std::vector<Facet<Dim>> f = sorted_facets<Dim>(cells.data(), nc);
-    for (std::size_t i = 0; i < f.size();) {
-      std::size_t j = i + 1;
-      while (j < f.size() && f[j].same(f[i]))
-        ++j;
+    const std::vector<Facet<Dim>> f = sorted_facets<Dim>(cells.data(), nc);
+    for_each_facet_run<Dim>(f, [&](std::size_t i, std::size_t j) {
       if (j - i > 2)
         fail("input: a facet held by more than two cells");
       if (j - i == 2) {
         nb[f[i].who] = f[i + 1].who / N;
         nb[f[i + 1].who] = f[i].who / N;
       }
-      i = j;
-    }
+    });
   }
 
   // Each selected cell (input ids, ascending) bisected exactly once, unless
@@ -340,22 +338,12 @@ private:
     ++collects;
     int k1, k2;
     others(c, a, b, k1, k2);
-    CellId prev = c, cur = nb[4 * std::size_t(c) + k1];
-    while (cur != kNoCell && cur != c) {
-      ring_.push_back(cur);
-      int j1, j2;
-      others(cur, a, b, j1, j2);
-      const CellId n1 = nb[4 * std::size_t(cur) + j1], n2 = nb[4 * std::size_t(cur) + j2];
-      const CellId next = n1 == prev ? n2 : n1;
-      prev = cur;
-      cur = next;
-      if (ring_.size() > 200)
-        fail("ring around an edge longer than 200 cells");
-    }
-    if (cur == kNoCell) { // the boundary: the other way from c
-      prev = c;
-      cur = nb[4 * std::size_t(c) + k2];
-      while (cur != kNoCell) {
+    // From c through its facet opposite local vertex k, around the edge,
+    // appending each cell met; returns where the walk ended: back at c (a
+    // closed ring) or kNoCell (the boundary).
+    auto walk = [&](int k) {
+      CellId prev = c, cur = nb[4 * std::size_t(c) + k];
+      while (cur != kNoCell && cur != c) {
         ring_.push_back(cur);
         int j1, j2;
         others(cur, a, b, j1, j2);
@@ -363,10 +351,13 @@ private:
         const CellId next = n1 == prev ? n2 : n1;
         prev = cur;
         cur = next;
-        if (cur == c || ring_.size() > 200)
-          fail("open ring closed on itself");
+        if (ring_.size() > 200)
+          fail("ring around an edge longer than 200 cells");
       }
-    }
+      return cur;
+    };
+    if (walk(k1) == kNoCell && walk(k2) == c) // the boundary: the other way from c
+      fail("open ring closed on itself");
   }
 
   // 4D (any Dim): ring_ = the cells around edge {a, b}, from c: a breadth-
@@ -623,10 +614,7 @@ template <int Dim> void check_patch(const Patch<Dim> &p, double volume0, bool cu
   const std::size_t nc = p.num_cells();
   std::vector<Facet<Dim>> f = sorted_facets<Dim>(p.cells.data(), nc);
   std::size_t boundary = 0, interior = 0;
-  for (std::size_t i = 0; i < f.size();) {
-    std::size_t j = i + 1;
-    while (j < f.size() && f[j].same(f[i]))
-      ++j;
+  for_each_facet_run<Dim>(f, [&](std::size_t i, std::size_t j) {
     if (j - i > 2)
       fail("not conforming: a facet held by more than two cells");
     if (j - i == 1) {
@@ -639,8 +627,7 @@ template <int Dim> void check_patch(const Patch<Dim> &p, double volume0, bool cu
         fail("neighbour array wrong: cells " + std::to_string(f[i].who / N) + " and " +
              std::to_string(f[i + 1].who / N) + " share a facet");
     }
-    i = j;
-  }
+  });
   // Every facet accounted for: with the two passes above, nb is symmetric
   // and each entry names the cell that really shares that facet.
   if (boundary + 2 * interior != N * nc)
@@ -650,25 +637,23 @@ template <int Dim> void check_patch(const Patch<Dim> &p, double volume0, bool cu
     fail("volume changed: " + std::to_string(v));
   // Conformity also means no vertex in the interior of a facet or an edge; a
   // facet held once must lie on the cube's boundary (else: a hanging facet).
-  for (std::size_t i = 0; i < f.size();) {
-    std::size_t j = i + 1;
-    while (j < f.size() && f[j].same(f[i]))
-      ++j;
-    if (cube && j - i == 1) {
-      VertexId ids[Dim];
-      f[i].ids(ids);
-      bool on_face = false;
-      for (int k = 0; k < Dim && !on_face; ++k) {
-        const double c0 = p.coords[Dim * std::size_t(ids[0]) + k];
-        on_face = c0 == 0.0 || c0 == 1.0;
-        for (int q = 1; q < Dim && on_face; ++q)
-          on_face = p.coords[Dim * std::size_t(ids[q]) + k] == c0;
-      }
-      if (!on_face)
-        fail("a facet held by one cell inside the cube (hanging)");
+  if (!cube)
+    return;
+  for_each_facet_run<Dim>(f, [&](std::size_t i, std::size_t j) {
+    if (j - i != 1)
+      return;
+    VertexId ids[Dim];
+    f[i].ids(ids);
+    bool on_face = false;
+    for (int k = 0; k < Dim && !on_face; ++k) {
+      const double c0 = p.coords[Dim * std::size_t(ids[0]) + k];
+      on_face = c0 == 0.0 || c0 == 1.0;
+      for (int q = 1; q < Dim && on_face; ++q)
+        on_face = p.coords[Dim * std::size_t(ids[q]) + k] == c0;
     }
-    i = j;
-  }
+    if (!on_face)
+      fail("a facet held by one cell inside the cube (hanging)");
+  });
 }
 
 template <int Dim> Mesh make_input(const std::string &input) {
