@@ -49,7 +49,7 @@ double shortest_edge(const Mesh &m) {
   return std::sqrt(h2);
 }
 
-// Runs Qhull with `options` on the (d+1)-dimensional lifted points and
+// Runs Qhull with the options `how` on the (d+1)-dimensional lifted points and
 // returns the (d+1)-tuples of vertex ids of the lower facets (outward normal
 // pointing down in the lift direction); throws when Qhull fails.
 std::vector<VertexId> lower_hull_with(std::vector<double> &lifted, int npoints, int d,
