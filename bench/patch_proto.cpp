@@ -57,6 +57,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <unordered_map>
 #include <vector>
 
 using namespace bisect;
@@ -183,6 +184,30 @@ std::vector<std::uint64_t> cell_hashes(const VertexId *cells, std::size_t nc,
   return h;
 }
 
+// A cell's state independent of vertex numbering: its stage, tag and its
+// points in tuple order, hashed (the tuple order decides all later bisections).
+template <int Dim>
+std::vector<std::uint64_t> state_hashes(const VertexId *cells, const Stage *stage,
+                                        const std::uint8_t *tag, std::size_t nc,
+                                        const double *coords) {
+  constexpr int N = Dim + 1;
+  std::vector<std::uint64_t> h(nc);
+  for (std::size_t c = 0; c < nc; ++c) {
+    std::uint64_t x = 0x9e3779b97f4a7c15ull ^ (std::uint64_t(stage[c]) << 8 | tag[c]);
+    for (int i = 0; i < N; ++i)
+      for (int k = 0; k < Dim; ++k) {
+        std::uint64_t b;
+        std::memcpy(&b, &coords[Dim * std::size_t(cells[N * c + i]) + k], 8);
+        x ^= b + 0x9e3779b97f4a7c15ull + (x << 6) + (x >> 2);
+        x *= 0xbf58476d1ce4e5b9ull;
+        x ^= x >> 31;
+      }
+    h[c] = x;
+  }
+  std::sort(h.begin(), h.end());
+  return h;
+}
+
 // A facet: its sorted ids (3D: v0 v1 | v2; 4D: v0 v1 | v2 v3), and who holds
 // it (cell * (Dim+1) + local vertex opposite).
 template <int Dim> struct Facet {
@@ -239,13 +264,23 @@ template <int Dim, class F> void for_each_facet_run(const std::vector<Facet<Dim>
   }
 }
 
-// The prototype: plain arrays, every cell a Maubach tuple with a tag.
+// Thrown by a recursion cycle: the cells of the cycle, each as its points.
+struct Cycle {
+  std::vector<std::vector<double>> cells;
+};
+
+// The prototype: plain arrays; a cell is a Maubach tuple with a tag, or (3D)
+// a Stage 1 cell (Stage::Opposite, its tag the number of new vertices).
 template <int Dim> class Patch {
   static constexpr int N = Dim + 1;
 
 public:
   std::vector<VertexId> cells;    // Dim+1 per cell
-  std::vector<std::uint8_t> tag;  // per cell, 1..Dim
+  std::vector<std::uint8_t> tag;  // per cell: Maubach 1..Dim, Stage 1 0..Dim-2
+  std::vector<Stage> stage;       // per cell
+  std::vector<std::uint8_t> pick; // per cell: its refinement edge's local ids, first << 4 | second
+  EdgeOrder order;                // the library's, over coords (set_order, once in place)
+  std::unordered_map<std::uint64_t, std::uint32_t> rank; // Marking::Explicit's (unused)
   std::vector<CellId> nb;         // Dim+1 per cell: across the facet opposite local i, or kNoCell
   std::vector<double> coords;     // Dim per vertex
   std::vector<std::uint16_t> gen; // per cell: bisections since the start (the tree, as ours)
@@ -253,6 +288,17 @@ public:
   std::size_t bisections = 0, rings = 0, ring_cells = 0, pushes = 0, max_stack = 0;
   std::size_t collects = 0, walked = 0; // patch collections, and the cells they visited
   std::size_t depth_sum = 0;            // the stack's depth at each patch bisection, summed
+  std::size_t stage1 = 0;               // Stage 1 cells bisected
+
+  // The edge order over this object's coords (call once the object is where
+  // it stays: the order holds a pointer to the vector), and every cell's
+  // refinement edge, cached (refine() recomputes it where it needs it).
+  void set_order(Marking marking) {
+    order = EdgeOrder{marking, &coords, Dim, &rank};
+    pick.resize(num_cells());
+    for (std::size_t c = 0; c < num_cells(); ++c)
+      pick[c] = pick_of(&cells[N * c], stage[c], tag[c]);
+  }
 
   std::size_t num_cells() const { return tag.size(); }
   std::size_t num_vertices() const { return coords.size() / Dim; }
@@ -286,6 +332,8 @@ public:
       cells.reserve(N * cap);
       nb.reserve(N * cap);
       tag.reserve(cap);
+      stage.reserve(cap);
+      pick.reserve(cap);
       gen.reserve(cap);
     }
     for (CellId c : selected)
@@ -301,6 +349,9 @@ private:
     VertexId x[N];
     CellId n[N];
     int t;
+    Stage s;
+    std::uint8_t pick;
+    VertexId keep; // the end of the edge its child 1 (in its slot) holds
   };
   std::vector<Old> old_;
   std::vector<std::uint32_t> seen_; // 4D: per cell, the collection that last reached it
@@ -314,9 +365,19 @@ private:
   };
   std::vector<Half> halves_;
 
+  // The refinement edge's local ids (refinement_pick in refine.cpp), packed.
+  std::uint8_t pick_of(const VertexId *x, Stage s, int t) const {
+    if (s == Stage::Maubach)
+      return std::uint8_t(t);
+    if constexpr (Dim != 3)
+      fail("a Stage 1 cell in the 4D prototype");
+    const EdgePick e = opposite_edge(order, x, Dim, t);
+    return std::uint8_t(e.first << 4 | e.second);
+  }
+
   bool has_edge(CellId c, VertexId a, VertexId b) const {
     const VertexId *x = &cells[N * std::size_t(c)];
-    const VertexId p = x[0], q = x[tag[c]];
+    const VertexId p = x[pick[c] >> 4], q = x[pick[c] & 15];
     return (p == a && q == b) || (p == b && q == a);
   }
 
@@ -392,13 +453,44 @@ private:
     }
   }
 
+  // Fails loudly, printing the stack from `from` (where the cycle starts)
+  // up: each cell's state and refinement edge.
+  // Throws Cycle (or fails past depth 10000).
+  [[noreturn]] void runaway(std::size_t from) {
+    std::fprintf(stderr, "runaway stack, depth %zu; from stack[%zu] up:\n", stack_.size(), from);
+    for (std::size_t k = from; k < stack_.size(); ++k) {
+      const CellId q = stack_[k];
+      const VertexId *y = &cells[N * std::size_t(q)];
+      std::fprintf(stderr, "  stack[%zu] = cell %u: %s tag %d gen %d, ids", k, unsigned(q),
+                   stage[q] == Stage::Maubach ? "Maubach" : "Stage 1", int(tag[q]), int(gen[q]));
+      for (int i = 0; i < N; ++i)
+        std::fprintf(stderr, " %u", unsigned(y[i]));
+      std::fprintf(stderr, ", refinement edge (%u, %u)\n", unsigned(y[pick[q] >> 4]),
+                   unsigned(y[pick[q] & 15]));
+    }
+    if (stack_.size() > 10000)
+      fail("recursion deeper than 10000");
+    std::fprintf(stderr, "recursion cycle: a cell's patch needs a cell below it on the stack "
+                         "bisected first\n");
+    Cycle cyc;
+    for (std::size_t k = from + 1; k < stack_.size(); ++k) {
+      const VertexId *y = &cells[N * std::size_t(stack_[k])];
+      std::vector<double> pts;
+      for (int i = 0; i < N; ++i)
+        pts.insert(pts.end(), &coords[Dim * std::size_t(y[i])],
+                   &coords[Dim * std::size_t(y[i])] + Dim);
+      cyc.cells.push_back(pts);
+    }
+    throw cyc;
+  }
+
   void bisect_cell(CellId c0) {
     stack_.clear();
     stack_.push_back(c0);
     while (!stack_.empty()) {
       const CellId c = stack_.back();
       const VertexId *x = &cells[N * std::size_t(c)];
-      const VertexId a = x[0], b = x[tag[c]];
+      const VertexId a = x[pick[c] >> 4], b = x[pick[c] & 15];
       if constexpr (Dim == 3)
         collect_ring(c, a, b);
       else
@@ -414,8 +506,16 @@ private:
         stack_.push_back(first_other);
         ++pushes;
         max_stack = std::max(max_stack, stack_.size());
-        if (stack_.size() > 10000)
-          fail("recursion deeper than 10000: a cycle (inconsistent tags?)");
+        // A cycle: first_other already waits lower on the stack, so no cell
+        // of the cycle can ever be bisected with its whole patch. Looked for
+        // only past depth 64 (the deepest terminating stack seen was 22).
+        if (stack_.size() > 64) {
+          std::size_t at = stack_.size() - 1; // its last place below the top
+          while (at > 0 && stack_[at - 1] != first_other)
+            --at;
+          if (at > 0 || stack_.size() > 10000)
+            runaway(at > 0 ? at - 1 : stack_.size() - 12);
+        }
         continue;
       }
       walked += ring_.size();
@@ -446,6 +546,8 @@ private:
     cells.resize(cells.size() + N * m);
     nb.resize(nb.size() + N * m);
     tag.resize(tag.size() + m);
+    stage.resize(stage.size() + m);
+    pick.resize(pick.size() + m);
     gen.resize(gen.size() + m);
     old_.resize(m);
     for (std::size_t i = 0; i < m; ++i) {
@@ -453,8 +555,71 @@ private:
       std::memcpy(old_[i].x, &cells[N * std::size_t(r)], sizeof old_[i].x);
       std::memcpy(old_[i].n, &nb[N * std::size_t(r)], sizeof old_[i].n);
       old_[i].t = tag[r];
+      old_[i].s = stage[r];
+      old_[i].pick = pick[r];
+      // Maubach: child 1 is x with x[t] -> z, holding x0; Stage 1: child 1
+      // drops the edge's first end (opposite_children).
+      old_[i].keep = old_[i].x[stage[r] == Stage::Maubach ? 0 : pick[r] & 15];
     }
     return z;
+  }
+
+  // 3D: ring cell i, a Stage 1 cell, bisected at z (midpoint of its
+  // refinement edge) by the library's opposite_children; the children's
+  // neighbours from where each vertex sits in them: in a child lacking end
+  // `lacks` and holding `keep`, the facet opposite z is the parent's facet
+  // opposite `lacks` (outside the ring; its back pointer fixed for child 2),
+  // the facet opposite `keep` is shared with the sibling, and the facet
+  // opposite any other vertex v halves the parent's facet opposite v, whose
+  // neighbour is in the ring: its child holding `keep` (child_with).
+  template <class ChildWith>
+  void bisect_stage1(std::size_t i, VertexId z, CellId base, ChildWith &child_with) {
+    const CellId s = ring_[i], s2 = CellId(base + i);
+    const Old &o = old_[i];
+    const EdgePick e{o.pick >> 4, o.pick & 15};
+    VertexId *c1 = &cells[4 * std::size_t(s)], *c2 = &cells[4 * std::size_t(s2)];
+    Stage cs;
+    int ct;
+    opposite_children(order, o.x, 3, o.t, e, z, c1, c2, cs, ct);
+    tag[s] = tag[s2] = std::uint8_t(ct);
+    stage[s] = stage[s2] = cs;
+    pick[s] = pick_of(c1, cs, ct);
+    pick[s2] = pick_of(c2, cs, ct);
+    ++stage1;
+    for (int which = 0; which < 2; ++which) {
+      const CellId ch = which == 0 ? s : s2, sib = which == 0 ? s2 : s;
+      const VertexId *y = which == 0 ? c1 : c2;
+      const VertexId keep = o.x[which == 0 ? e.second : e.first];
+      const int lacks = which == 0 ? e.first : e.second; // local in o.x
+      CellId *n = &nb[4 * std::size_t(ch)];
+      for (int k = 0; k < 4; ++k) {
+        const VertexId v = y[k];
+        if (v == z) {
+          const CellId out = o.n[lacks];
+          n[k] = out;
+          if (out != kNoCell && ch != s) {
+            CellId *back = &nb[4 * std::size_t(out)];
+            int q = 0;
+            while (q < 4 && back[q] != s)
+              ++q;
+            if (q == 4)
+              fail("outside neighbour does not point back");
+            back[q] = ch;
+          }
+        } else if (v == keep) {
+          n[k] = sib;
+        } else {
+          int p = 0;
+          while (p < 4 && o.x[p] != v)
+            ++p;
+          if (p == 4)
+            fail("a Stage 1 child's vertex not in its parent");
+          n[k] = o.n[p] == kNoCell ? kNoCell : child_with(o.n[p], keep);
+        }
+      }
+    }
+    if (s < nc0_)
+      done_[s] = 1;
   }
 
   // 3D: bisects every cell of ring_ (all refined at edge {a, b}) at one midpoint.
@@ -462,11 +627,11 @@ private:
     const std::size_t m = ring_.size();
     CellId base;
     const VertexId z = open_ring(a, b, base);
-    // The child of ring cell j that holds end v: child 1 (its slot) holds its x0.
+    // The child of ring cell j that holds end v: child 1 (its slot) holds its keep.
     auto child_with = [&](CellId n, VertexId v) -> CellId {
       for (std::size_t j = 0; j < m; ++j)
         if (ring_[j] == n)
-          return old_[j].x[0] == v ? n : CellId(base + j);
+          return old_[j].keep == v ? n : CellId(base + j);
       fail("a neighbour across a facet holding the edge is not in its ring");
     };
     for (std::size_t i = 0; i < m; ++i) {
@@ -474,10 +639,16 @@ private:
       const Old &o = old_[i];
       const int d = o.t;
       VertexId *c1 = &cells[4 * std::size_t(s)], *c2 = &cells[4 * std::size_t(s2)];
+      gen[s2] = ++gen[s];
+      if (o.s != Stage::Maubach) {
+        bisect_stage1(i, z, base, child_with);
+        continue;
+      }
       maubach_children<3>(o.x, d, z, c1, c2);
       const std::uint8_t t = std::uint8_t(maubach_child_tag(d, 3));
       tag[s] = tag[s2] = t;
-      gen[s2] = ++gen[s];
+      stage[s] = stage[s2] = Stage::Maubach;
+      pick[s] = pick[s2] = t;
       CellId *n1 = &nb[4 * std::size_t(s)], *n2 = &nb[4 * std::size_t(s2)];
       // Child 1 = x with x[d] -> z: facet opposite z is the parent's facet
       // opposite x[d] (same outside neighbour, whose back pointer names slot
@@ -535,6 +706,8 @@ private:
       maubach_children<Dim>(o.x, d, z, &cells[N * std::size_t(s)], &cells[N * std::size_t(s2)]);
       const std::uint8_t t = std::uint8_t(maubach_child_tag(d, Dim));
       tag[s] = tag[s2] = t;
+      stage[s] = stage[s2] = Stage::Maubach;
+      pick[s] = pick[s2] = t;
       gen[s2] = ++gen[s];
       for (const CellId ch : {s, s2}) {
         const VertexId *y = &cells[N * std::size_t(ch)];
@@ -675,22 +848,39 @@ template <int Dim> Mesh make_input(const std::string &input) {
   // Index marking (the brief's). PROTO_MARKING=sorted: the sorted rule
   // ((x0 < ... < xn)_n, ALGORITHMS.md §4), Maubach from the start in 4D too,
   // where index marking puts every pentatope in Stage 1.
+  // PROTO_MARKING=longest: longest-edge order; in 3D its A/M/O tets (every
+  // Kuhn tet) start in Stage 1, which the 3D prototype bisects with the
+  // library's opposite_edge/opposite_children.
   const char *mk = std::getenv("PROTO_MARKING");
-  const bool sorted = mk && std::string(mk) == "sorted";
-  if (mk && !sorted && std::string(mk) != "index")
-    fail("PROTO_MARKING must be index or sorted");
-  mark_mesh(m, sorted ? Marking::Sorted : Marking::Index);
+  const std::string mks = mk ? mk : "index";
+  Marking marking;
+  if (mks == "index")
+    marking = Marking::Index;
+  else if (mks == "sorted")
+    marking = Marking::Sorted;
+  else if (mks == "longest")
+    marking = Marking::Longest;
+  else
+    fail("PROTO_MARKING must be index, sorted or longest");
+  mark_mesh(m, marking);
+  std::size_t stage1 = 0;
   for (std::size_t c = 0; c < m.num_cells(); ++c)
-    if (m.stage[c] != Stage::Maubach || m.tag[c] < 1 || m.tag[c] > Dim)
+    if (Dim == 3 && m.stage[c] == Stage::Opposite && m.tag[c] <= 1)
+      ++stage1;
+    else if (m.stage[c] != Stage::Maubach || m.tag[c] < 1 || m.tag[c] > Dim)
       fail("input cell " + std::to_string(c) + " is not a Maubach tuple (stage " +
            std::to_string(int(m.stage[c])) + ", tag " + std::to_string(int(m.tag[c])) + ")");
+  std::printf("marking %s: %zu of %zu input cells in Stage 1\n", mks.c_str(), stage1,
+              m.num_cells());
   return m;
 }
 
+// Call set_order on the result once it is where it stays.
 template <int Dim> Patch<Dim> make_patch(const Mesh &m) {
   Patch<Dim> p;
   p.cells = m.cells;
   p.tag = m.tag;
+  p.stage = m.stage;
   p.coords = m.coords;
   p.gen.assign(m.num_cells(), 0);
   p.parent_edge.assign(2 * m.num_vertices(), kNoVertex);
@@ -732,6 +922,7 @@ int run(const std::string &mode, const std::string &input, int iterations,
   double t_build = 0;
   if (proto) {
     patch = make_patch<Dim>(mesh);
+    patch.set_order(mesh.marking);
     const auto t0 = Clock::now();
     patch.build_neighbours();
     t_build = secs(t0, Clock::now());
@@ -783,6 +974,11 @@ int run(const std::string &mode, const std::string &input, int iterations,
       t_ours += t;
       b_ours += r.bisections;
       cells_ours = mesh.num_cells();
+      if (std::getenv("PROTO_STATECHECK")) { // diagnosis: the library's consistency check
+        const std::string why = check_state_consistency(mesh);
+        std::printf("     refine()'s states after iteration %d: %s\n", it,
+                    why.empty() ? "consistent (check_state_consistency)" : why.c_str());
+      }
       std::printf("%4d %10zu %10zu %9zu %9.4f %10.2f %9s  ours (%zu closure passes)\n", it,
                   sel.size(), cells_ours, r.bisections, t, 2e-6 * r.bisections / t, "",
                   r.closure_passes);
@@ -790,9 +986,35 @@ int run(const std::string &mode, const std::string &input, int iterations,
     if (proto) {
       const auto sel = select_proto();
       const std::size_t b0 = patch.bisections, rings0 = patch.rings, push0 = patch.pushes,
-                        depth0 = patch.depth_sum;
+                        depth0 = patch.depth_sum, s10 = patch.stage1;
       const auto t0 = Clock::now();
-      patch.refine(sel);
+      try {
+        patch.refine(sel);
+      } catch (const Cycle &cyc) {
+        // Which of the cycle's cells refine() bisected in this iteration
+        // (check mode): a cell of the cycle can be bisected only through a
+        // non-conforming intermediate mesh.
+        if (ours) {
+          std::size_t gone = 0;
+          for (const std::vector<double> &pts : cyc.cells) {
+            bool present = false;
+            for (std::size_t c = 0; c < mesh.num_cells() && !present; ++c) {
+              present = true;
+              for (int i = 0; i < N && present; ++i) {
+                const double *p = mesh.point(mesh.cell(CellId(c))[i]);
+                bool found = false;
+                for (int j = 0; j < N && !found; ++j)
+                  found = std::equal(p, p + Dim, pts.begin() + Dim * j);
+                present = found;
+              }
+            }
+            gone += !present;
+          }
+          std::printf("iteration %d: refine() bisected %zu of the cycle's %zu cells\n", it, gone,
+                      cyc.cells.size());
+        }
+        fail("iteration " + std::to_string(it) + ": recursion cycle (runaway stack)");
+      }
       const double t = secs(t0, Clock::now());
       t_proto += t;
       const std::size_t b = patch.bisections - b0;
@@ -807,14 +1029,20 @@ int run(const std::string &mode, const std::string &input, int iterations,
         if (cell_hashes<Dim>(mesh.cells.data(), mesh.num_cells(), mesh.coords.data()) !=
             cell_hashes<Dim>(patch.cells.data(), patch.num_cells(), patch.coords.data()))
           fail("iteration " + std::to_string(it) + ": the two meshes' cells differ");
+        if (state_hashes<Dim>(mesh.cells.data(), mesh.stage.data(), mesh.tag.data(),
+                              mesh.num_cells(), mesh.coords.data()) !=
+            state_hashes<Dim>(patch.cells.data(), patch.stage.data(), patch.tag.data(),
+                              patch.num_cells(), patch.coords.data()))
+          fail("iteration " + std::to_string(it) +
+               ": the two meshes' cell states (stage, tag, tuple order) differ");
         verdict = "ok";
       }
       const double nr = double(patch.rings - rings0);
       std::printf("%4d %10zu %10zu %9zu %9.4f %10.2f %9s  proto (%zu rings, mean %.2f cells, "
-                  "%zu pushes, max stack %zu, mean depth %.2f)\n",
+                  "%zu pushes, max stack %zu, mean depth %.2f, %zu Stage 1)\n",
                   it, sel.size(), cells_proto, b, t, 2e-6 * b / t, verdict, patch.rings - rings0,
                   double(b) / nr, patch.pushes - push0, patch.max_stack,
-                  double(patch.depth_sum - depth0) / nr);
+                  double(patch.depth_sum - depth0) / nr, patch.stage1 - s10);
     }
     std::fflush(stdout);
   }
