@@ -453,9 +453,8 @@ private:
     }
   }
 
-  // Fails loudly, printing the stack from `from` (where the cycle starts)
-  // up: each cell's state and refinement edge.
-  // Throws Cycle (or fails past depth 10000).
+  // Prints the stack from `from` (where the cycle starts) up: each cell's
+  // state and refinement edge; throws Cycle (or fails past depth 10000).
   [[noreturn]] void runaway(std::size_t from) {
     std::fprintf(stderr, "runaway stack, depth %zu; from stack[%zu] up:\n", stack_.size(), from);
     for (std::size_t k = from; k < stack_.size(); ++k) {
@@ -465,8 +464,11 @@ private:
                    stage[q] == Stage::Maubach ? "Maubach" : "Stage 1", int(tag[q]), int(gen[q]));
       for (int i = 0; i < N; ++i)
         std::fprintf(stderr, " %u", unsigned(y[i]));
-      std::fprintf(stderr, ", refinement edge (%u, %u)\n", unsigned(y[pick[q] >> 4]),
-                   unsigned(y[pick[q] & 15]));
+      // Whether the cell was in the mesh when this call began, or is a child
+      // made by this call (the input cells' slots: done_ once bisected).
+      const bool input = q < nc0_ && !done_[q];
+      std::fprintf(stderr, ", refinement edge (%u, %u), %s\n", unsigned(y[pick[q] >> 4]),
+                   unsigned(y[pick[q] & 15]), input ? "in the input" : "made in this call");
     }
     if (stack_.size() > 10000)
       fail("recursion deeper than 10000");
