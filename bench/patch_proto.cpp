@@ -275,11 +275,16 @@ template <int Dim> class Patch {
   static constexpr int N = Dim + 1;
 
 public:
-  std::vector<VertexId> cells;    // Dim+1 per cell
-  std::vector<std::uint8_t> tag;  // per cell: Maubach 1..Dim, Stage 1 0..Dim-2
-  std::vector<Stage> stage;       // per cell
-  std::vector<std::uint8_t> pick; // per cell: its refinement edge's local ids, first << 4 | second
-  EdgeOrder order;                // the library's, over coords (set_order, once in place)
+  std::vector<VertexId> cells; // Dim+1 per cell
+  // Per cell, its state in one byte (one array: the ring's cells are scattered,
+  // and each more per-cell array costs a cache miss per ring cell): a Maubach
+  // tuple's tag 1..Dim (refinement edge local (0, tag)), or (3D) a Stage 1
+  // cell, whose tag is 0 (no new vertices: its children enter Maubach), as
+  // kStage1 | first << 3 | second, its refinement edge's local ids
+  // (opposite_edge, cached: refine() recomputes it where it needs it).
+  std::vector<std::uint8_t> tag;
+  static constexpr std::uint8_t kStage1 = 0x80;
+  EdgeOrder order; // the library's, over coords (set_order, once in place)
   std::unordered_map<std::uint64_t, std::uint32_t> rank; // Marking::Explicit's (unused)
   std::vector<CellId> nb;         // Dim+1 per cell: across the facet opposite local i, or kNoCell
   std::vector<double> coords;     // Dim per vertex
@@ -291,14 +296,19 @@ public:
   std::size_t stage1 = 0;               // Stage 1 cells bisected
 
   // The edge order over this object's coords (call once the object is where
-  // it stays: the order holds a pointer to the vector), and every cell's
-  // refinement edge, cached (refine() recomputes it where it needs it).
-  void set_order(Marking marking) {
+  // it stays: the order holds a pointer to the vector), and the input's
+  // states (the mesh's stage and tag arrays) encoded in tag.
+  void set_order(Marking marking, const std::vector<Stage> &stage) {
     order = EdgeOrder{marking, &coords, Dim, &rank};
-    pick.resize(num_cells());
     for (std::size_t c = 0; c < num_cells(); ++c)
-      pick[c] = pick_of(&cells[N * c], stage[c], tag[c]);
+      tag[c] = encode(&cells[N * c], stage[c], tag[c]);
   }
+
+  // The library's stage and tag of cell c.
+  Stage stage_of(std::size_t c) const {
+    return tag[c] & kStage1 ? Stage::Opposite : Stage::Maubach;
+  }
+  std::uint8_t tag_of(std::size_t c) const { return tag[c] & kStage1 ? 0 : tag[c]; }
 
   std::size_t num_cells() const { return tag.size(); }
   std::size_t num_vertices() const { return coords.size() / Dim; }
@@ -332,8 +342,6 @@ public:
       cells.reserve(N * cap);
       nb.reserve(N * cap);
       tag.reserve(cap);
-      stage.reserve(cap);
-      pick.reserve(cap);
       gen.reserve(cap);
     }
     for (CellId c : selected)
@@ -348,9 +356,7 @@ private:
   struct Old {
     VertexId x[N];
     CellId n[N];
-    int t;
-    Stage s;
-    std::uint8_t pick;
+    int t;         // the encoded tag
     VertexId keep; // the end of the edge its child 1 (in its slot) holds
   };
   std::vector<Old> old_;
@@ -365,19 +371,24 @@ private:
   };
   std::vector<Half> halves_;
 
-  // The refinement edge's local ids (refinement_pick in refine.cpp), packed.
-  std::uint8_t pick_of(const VertexId *x, Stage s, int t) const {
+  // A state in one byte (tag above): the refinement edge's local ids
+  // (refinement_pick in refine.cpp) kept for a Stage 1 cell.
+  std::uint8_t encode(const VertexId *x, Stage s, int t) const {
     if (s == Stage::Maubach)
       return std::uint8_t(t);
-    if constexpr (Dim != 3)
-      fail("a Stage 1 cell in the 4D prototype");
+    if (Dim != 3 || t != 0)
+      fail("a Stage 1 cell other than a 3D one with tag 0");
     const EdgePick e = opposite_edge(order, x, Dim, t);
-    return std::uint8_t(e.first << 4 | e.second);
+    return std::uint8_t(kStage1 | e.first << 3 | e.second);
   }
+  // The local ids of the refinement edge of a cell in state b.
+  static int first_end(std::uint8_t b) { return b & kStage1 ? (b >> 3) & 7 : 0; }
+  static int second_end(std::uint8_t b) { return b & kStage1 ? b & 7 : b; }
 
   bool has_edge(CellId c, VertexId a, VertexId b) const {
     const VertexId *x = &cells[N * std::size_t(c)];
-    const VertexId p = x[pick[c] >> 4], q = x[pick[c] & 15];
+    const std::uint8_t t = tag[c];
+    const VertexId p = x[first_end(t)], q = x[second_end(t)];
     return (p == a && q == b) || (p == b && q == a);
   }
 
@@ -461,14 +472,14 @@ private:
       const CellId q = stack_[k];
       const VertexId *y = &cells[N * std::size_t(q)];
       std::fprintf(stderr, "  stack[%zu] = cell %u: %s tag %d gen %d, ids", k, unsigned(q),
-                   stage[q] == Stage::Maubach ? "Maubach" : "Stage 1", int(tag[q]), int(gen[q]));
+                   tag[q] & kStage1 ? "Stage 1" : "Maubach", int(tag_of(q)), int(gen[q]));
       for (int i = 0; i < N; ++i)
         std::fprintf(stderr, " %u", unsigned(y[i]));
       // Whether the cell was in the mesh when this call began, or is a child
       // made by this call (the input cells' slots: done_ once bisected).
       const bool input = q < nc0_ && !done_[q];
-      std::fprintf(stderr, ", refinement edge (%u, %u), %s\n", unsigned(y[pick[q] >> 4]),
-                   unsigned(y[pick[q] & 15]), input ? "in the input" : "made in this call");
+      std::fprintf(stderr, ", refinement edge (%u, %u), %s\n", unsigned(y[first_end(tag[q])]),
+                   unsigned(y[second_end(tag[q])]), input ? "in the input" : "made in this call");
     }
     if (stack_.size() > 10000)
       fail("recursion deeper than 10000");
@@ -492,7 +503,7 @@ private:
     while (!stack_.empty()) {
       const CellId c = stack_.back();
       const VertexId *x = &cells[N * std::size_t(c)];
-      const VertexId a = x[pick[c] >> 4], b = x[pick[c] & 15];
+      const VertexId a = x[first_end(tag[c])], b = x[second_end(tag[c])];
       if constexpr (Dim == 3)
         collect_ring(c, a, b);
       else
@@ -548,8 +559,6 @@ private:
     cells.resize(cells.size() + N * m);
     nb.resize(nb.size() + N * m);
     tag.resize(tag.size() + m);
-    stage.resize(stage.size() + m);
-    pick.resize(pick.size() + m);
     gen.resize(gen.size() + m);
     old_.resize(m);
     for (std::size_t i = 0; i < m; ++i) {
@@ -557,11 +566,9 @@ private:
       std::memcpy(old_[i].x, &cells[N * std::size_t(r)], sizeof old_[i].x);
       std::memcpy(old_[i].n, &nb[N * std::size_t(r)], sizeof old_[i].n);
       old_[i].t = tag[r];
-      old_[i].s = stage[r];
-      old_[i].pick = pick[r];
       // Maubach: child 1 is x with x[t] -> z, holding x0; Stage 1: child 1
       // drops the edge's first end (opposite_children).
-      old_[i].keep = old_[i].x[stage[r] == Stage::Maubach ? 0 : pick[r] & 15];
+      old_[i].keep = old_[i].x[tag[r] & kStage1 ? tag[r] & 7 : 0];
     }
     return z;
   }
@@ -575,18 +582,17 @@ private:
   // opposite any other vertex v halves the parent's facet opposite v, whose
   // neighbour is in the ring: its child holding `keep` (child_with).
   template <class ChildWith>
-  void bisect_stage1(std::size_t i, VertexId z, CellId base, ChildWith &child_with) {
+  [[gnu::noinline]] void bisect_stage1(std::size_t i, VertexId z, CellId base,
+                                       ChildWith &child_with) {
     const CellId s = ring_[i], s2 = CellId(base + i);
     const Old &o = old_[i];
-    const EdgePick e{o.pick >> 4, o.pick & 15};
+    const EdgePick e{first_end(std::uint8_t(o.t)), second_end(std::uint8_t(o.t))};
     VertexId *c1 = &cells[4 * std::size_t(s)], *c2 = &cells[4 * std::size_t(s2)];
     Stage cs;
     int ct;
-    opposite_children(order, o.x, 3, o.t, e, z, c1, c2, cs, ct);
-    tag[s] = tag[s2] = std::uint8_t(ct);
-    stage[s] = stage[s2] = cs;
-    pick[s] = pick_of(c1, cs, ct);
-    pick[s2] = pick_of(c2, cs, ct);
+    opposite_children(order, o.x, 3, 0, e, z, c1, c2, cs, ct);
+    tag[s] = encode(c1, cs, ct);
+    tag[s2] = encode(c2, cs, ct);
     ++stage1;
     for (int which = 0; which < 2; ++which) {
       const CellId ch = which == 0 ? s : s2, sib = which == 0 ? s2 : s;
@@ -642,15 +648,13 @@ private:
       const int d = o.t;
       VertexId *c1 = &cells[4 * std::size_t(s)], *c2 = &cells[4 * std::size_t(s2)];
       gen[s2] = ++gen[s];
-      if (o.s != Stage::Maubach) {
+      if (d & kStage1) {
         bisect_stage1(i, z, base, child_with);
         continue;
       }
       maubach_children<3>(o.x, d, z, c1, c2);
       const std::uint8_t t = std::uint8_t(maubach_child_tag(d, 3));
       tag[s] = tag[s2] = t;
-      stage[s] = stage[s2] = Stage::Maubach;
-      pick[s] = pick[s2] = t;
       CellId *n1 = &nb[4 * std::size_t(s)], *n2 = &nb[4 * std::size_t(s2)];
       // Child 1 = x with x[d] -> z: facet opposite z is the parent's facet
       // opposite x[d] (same outside neighbour, whose back pointer names slot
@@ -708,8 +712,6 @@ private:
       maubach_children<Dim>(o.x, d, z, &cells[N * std::size_t(s)], &cells[N * std::size_t(s2)]);
       const std::uint8_t t = std::uint8_t(maubach_child_tag(d, Dim));
       tag[s] = tag[s2] = t;
-      stage[s] = stage[s2] = Stage::Maubach;
-      pick[s] = pick[s2] = t;
       gen[s2] = ++gen[s];
       for (const CellId ch : {s, s2}) {
         const VertexId *y = &cells[N * std::size_t(ch)];
@@ -882,7 +884,6 @@ template <int Dim> Patch<Dim> make_patch(const Mesh &m) {
   Patch<Dim> p;
   p.cells = m.cells;
   p.tag = m.tag;
-  p.stage = m.stage;
   p.coords = m.coords;
   p.gen.assign(m.num_cells(), 0);
   p.parent_edge.assign(2 * m.num_vertices(), kNoVertex);
@@ -924,7 +925,7 @@ int run(const std::string &mode, const std::string &input, int iterations,
   double t_build = 0;
   if (proto) {
     patch = make_patch<Dim>(mesh);
-    patch.set_order(mesh.marking);
+    patch.set_order(mesh.marking, mesh.stage);
     const auto t0 = Clock::now();
     patch.build_neighbours();
     t_build = secs(t0, Clock::now());
@@ -1031,10 +1032,16 @@ int run(const std::string &mode, const std::string &input, int iterations,
         if (cell_hashes<Dim>(mesh.cells.data(), mesh.num_cells(), mesh.coords.data()) !=
             cell_hashes<Dim>(patch.cells.data(), patch.num_cells(), patch.coords.data()))
           fail("iteration " + std::to_string(it) + ": the two meshes' cells differ");
+        std::vector<Stage> st(patch.num_cells());
+        std::vector<std::uint8_t> tg(patch.num_cells());
+        for (std::size_t c = 0; c < st.size(); ++c) {
+          st[c] = patch.stage_of(c);
+          tg[c] = patch.tag_of(c);
+        }
         if (state_hashes<Dim>(mesh.cells.data(), mesh.stage.data(), mesh.tag.data(),
                               mesh.num_cells(), mesh.coords.data()) !=
-            state_hashes<Dim>(patch.cells.data(), patch.stage.data(), patch.tag.data(),
-                              patch.num_cells(), patch.coords.data()))
+            state_hashes<Dim>(patch.cells.data(), st.data(), tg.data(), patch.num_cells(),
+                              patch.coords.data()))
           fail("iteration " + std::to_string(it) +
                ": the two meshes' cell states (stage, tag, tuple order) differ");
         verdict = "ok";
