@@ -1,5 +1,6 @@
 // Prototype (issue 13, not the library): closure without global scans.
-// 3D and 4D, Maubach tuples only. A facet-neighbour array (Dim+1 cell ids
+// 3D and 4D Maubach tuples, and 3D Stage 1 tets (Stage::Opposite, as the
+// longest marking gives). A facet-neighbour array (Dim+1 cell ids
 // per cell, the neighbour across the facet opposite local vertex i) is kept
 // current by every bisection; bisecting a cell at its refinement edge e
 // bisects the whole patch of cells around e at once (recursive patch
@@ -7,12 +8,17 @@
 // patch cell whose own refinement edge is not e. No midpoint table, no scans.
 //
 // 3D: the patch is a ring, walked both ways; the children's neighbours come
-// from hand-written index formulas. 4D: the cells around an edge are no
-// cycle; the patch is collected by a search through the Dim-1 facets of each
-// cell that hold the edge (a visited stamp per cell), and the children's
-// neighbours by generic facet matching (sorted ids of every child facet that
-// holds the midpoint, matched within the patch; the facet opposite the
-// midpoint takes the parent's outside neighbour, whose back pointer is fixed).
+// from hand-written index formulas for a Maubach tet; a Stage 1 tet is bisected
+// by the library's opposite_edge/opposite_children, its children's neighbours
+// from where each vertex sits in them (bisect_stage1). Recursive patch
+// bisection can meet a cycle: each cell's patch holds the next cell, whose
+// refinement edge differs, and the last's holds the first. No cell of it can
+// then be bisected with its whole patch; it is detected (runaway) and fails
+// loudly. The ball with longest marking meets one (see the results). 4D: the cells around an edge
+// are no cycle; the patch is collected by a search through the Dim-1 facets of each cell that hold
+// the edge (a visited stamp per cell), and the children's neighbours by generic facet matching
+// (sorted ids of every child facet that holds the midpoint, matched within the patch; the facet
+// opposite the midpoint takes the parent's outside neighbour, whose back pointer is fixed).
 //
 // Measured against bisect::refine() on the same Kuhn cube, the same
 // selection rule, one thread.
@@ -31,10 +37,15 @@
 //   PROTO_THREADS=N in the environment: the library's threads (default 1;
 //          the prototype itself is serial).
 //   PROTO_MARKING=sorted: the sorted marking instead of index (in 4D index
-//          marking gives Stage 1 cells, which the prototype cannot bisect).
-//   check: both in one process; after every iteration compares cell counts
-//          and the cells (by their vertices' coordinates), and checks the
-//          prototype's conformity (facets sorted), volume and neighbours.
+//          marking gives Stage 1 cells, which the 4D prototype cannot bisect).
+//   PROTO_MARKING=longest: the longest-edge marking (3D: A/M/O tets, every
+//          Kuhn tet among them, start in Stage 1).
+//   check: both in one process; after every iteration compares cell counts,
+//          the cells (by their vertices' coordinates) and their states (stage,
+//          tag, points in tuple order), and checks the prototype's conformity
+//          (facets sorted), volume and neighbours.
+//   PROTO_STATECHECK=1 (check mode): also check_state_consistency on
+//          refine()'s mesh after every iteration.
 #include "bench_util.hpp"
 #include "bisect/check.hpp"
 #include "bisect/generate.hpp"
@@ -885,6 +896,7 @@ template <int Dim> Patch<Dim> make_patch(const Mesh &m) {
   p.cells = m.cells;
   p.tag = m.tag;
   p.coords = m.coords;
+  p.rank = m.edge_rank;
   p.gen.assign(m.num_cells(), 0);
   p.parent_edge.assign(2 * m.num_vertices(), kNoVertex);
   return p;
