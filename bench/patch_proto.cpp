@@ -168,6 +168,15 @@ double total_volume(const VertexId *cells, std::size_t nc, const double *coords)
   return s;
 }
 
+// Mixes a coordinate's bits into hash x (the cell hashes below).
+inline void mix(std::uint64_t &x, double value) {
+  std::uint64_t b;
+  std::memcpy(&b, &value, 8);
+  x ^= b + 0x9e3779b97f4a7c15ull + (x << 6) + (x >> 2);
+  x *= 0xbf58476d1ce4e5b9ull;
+  x ^= x >> 31;
+}
+
 // A cell's key independent of vertex numbering: its points, sorted, hashed.
 template <int Dim>
 std::vector<std::uint64_t> cell_hashes(const VertexId *cells, std::size_t nc,
@@ -182,13 +191,8 @@ std::vector<std::uint64_t> cell_hashes(const VertexId *cells, std::size_t nc,
     std::sort(p.begin(), p.end());
     std::uint64_t x = 0x9e3779b97f4a7c15ull;
     for (int i = 0; i < N; ++i)
-      for (int k = 0; k < Dim; ++k) {
-        std::uint64_t b;
-        std::memcpy(&b, &p[i][k], 8);
-        x ^= b + 0x9e3779b97f4a7c15ull + (x << 6) + (x >> 2);
-        x *= 0xbf58476d1ce4e5b9ull;
-        x ^= x >> 31;
-      }
+      for (int k = 0; k < Dim; ++k)
+        mix(x, p[i][k]);
     h[c] = x;
   }
   std::sort(h.begin(), h.end());
@@ -206,13 +210,8 @@ std::vector<std::uint64_t> state_hashes(const VertexId *cells, const Stage *stag
   for (std::size_t c = 0; c < nc; ++c) {
     std::uint64_t x = 0x9e3779b97f4a7c15ull ^ (std::uint64_t(stage[c]) << 8 | tag[c]);
     for (int i = 0; i < N; ++i)
-      for (int k = 0; k < Dim; ++k) {
-        std::uint64_t b;
-        std::memcpy(&b, &coords[Dim * std::size_t(cells[N * c + i]) + k], 8);
-        x ^= b + 0x9e3779b97f4a7c15ull + (x << 6) + (x >> 2);
-        x *= 0xbf58476d1ce4e5b9ull;
-        x ^= x >> 31;
-      }
+      for (int k = 0; k < Dim; ++k)
+        mix(x, coords[Dim * std::size_t(cells[N * c + i]) + k]);
     h[c] = x;
   }
   std::sort(h.begin(), h.end());
