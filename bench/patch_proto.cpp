@@ -395,6 +395,17 @@ private:
   static int first_end(std::uint8_t b) { return b & kStage1 ? (b >> 3) & 7 : 0; }
   static int second_end(std::uint8_t b) { return b & kStage1 ? b & 7 : b; }
 
+  // Outside cell `out`, which named `from` as a neighbour, names `to` instead.
+  void repoint(CellId out, CellId from, CellId to) {
+    CellId *back = &nb[N * std::size_t(out)];
+    int q = 0;
+    while (q < N && back[q] != from)
+      ++q;
+    if (q == N)
+      fail("outside neighbour does not point back");
+    back[q] = to;
+  }
+
   bool has_edge(CellId c, VertexId a, VertexId b) const {
     const VertexId *x = &cells[N * std::size_t(c)];
     const std::uint8_t t = tag[c];
@@ -618,15 +629,8 @@ private:
         if (v == z) {
           const CellId out = o.n[lacks];
           n[k] = out;
-          if (out != kNoCell && ch != s) {
-            CellId *back = &nb[4 * std::size_t(out)];
-            int q = 0;
-            while (q < 4 && back[q] != s)
-              ++q;
-            if (q == 4)
-              fail("outside neighbour does not point back");
-            back[q] = ch;
-          }
+          if (out != kNoCell && ch != s)
+            repoint(out, s, ch);
         } else if (v == keep) {
           n[k] = sib;
         } else {
@@ -676,15 +680,8 @@ private:
       n1[0] = s2;
       // Child 2 = (x1..xd, z, x(d+1)..): x[k] at k-1 for 1 <= k <= d, z at d.
       n2[d] = o.n[0];
-      if (o.n[0] != kNoCell) {
-        CellId *back = &nb[4 * std::size_t(o.n[0])];
-        int k = 0;
-        while (k < 4 && back[k] != s)
-          ++k;
-        if (k == 4)
-          fail("outside neighbour does not point back");
-        back[k] = s2;
-      }
+      if (o.n[0] != kNoCell)
+        repoint(o.n[0], s, s2);
       n2[d - 1] = s;
       for (int k = 1; k < 4; ++k) {
         if (k == d)
@@ -741,15 +738,8 @@ private:
               ++j;
             const CellId out = o.n[j];
             n[k] = out;
-            if (out != kNoCell && ch != s) {
-              CellId *back = &nb[N * std::size_t(out)];
-              int q = 0;
-              while (q < N && back[q] != s)
-                ++q;
-              if (q == N)
-                fail("outside neighbour does not point back");
-              back[q] = ch;
-            }
+            if (out != kNoCell && ch != s)
+              repoint(out, s, ch);
             continue;
           }
           Half h;
