@@ -501,7 +501,13 @@ struct MshFile {
   std::size_t off_plane_at = kNone;              // first triangle with a node off z = 0
   std::string off_plane_what;
   bool have_entities = false;
-  std::map<std::pair<int, long long>, long long> first_physical; // (dim, entity) -> tag or 0
+  // (dim, entity) -> its physical tags, in file order, without repeats or 0
+  std::map<std::pair<int, long long>, std::vector<long long>> physicals;
+  // The first of an entity's physical tags, or 0 (none, or no such entity).
+  long long first_physical(int dim, long long entity) const {
+    const auto it = physicals.find({dim, entity});
+    return it == physicals.end() || it->second.empty() ? 0 : it->second.front();
+  }
   std::vector<DataBlock> data;
   std::vector<PhysicalName> physical_names;
 };
@@ -903,7 +909,8 @@ void read_elements41(Source &src, MshFile &f) {
   src.expect_end("Elements");
 }
 
-// 4.1 $Entities: remembers the first physical tag of every entity.
+// 4.1 $Entities: remembers the physical tags of every entity (an entity in
+// several physical groups lists them all).
 void read_entities41(Source &src, MshFile &f) {
   std::uint64_t counts[4];
   for (std::uint64_t &c : counts)
@@ -915,18 +922,18 @@ void read_entities41(Source &src, MshFile &f) {
       for (int k = 0; k < (d == 0 ? 3 : 6); ++k)
         real41(src, "entity bounding box coordinate");
       const std::uint64_t nphys = size41(src, "the number of physical tags");
-      long long first = 0;
+      std::vector<long long> tags;
       for (std::uint64_t j = 0; j < nphys; ++j) {
         const long long p = int41(src, "physical tag");
-        if (j == 0)
-          first = p;
+        if (p != 0 && std::find(tags.begin(), tags.end(), p) == tags.end())
+          tags.push_back(p);
       }
       if (d > 0) {
         const std::uint64_t nb = size41(src, "the number of bounding entities");
         for (std::uint64_t j = 0; j < nb; ++j)
           int41(src, "bounding entity tag");
       }
-      if (!f.first_physical.emplace(std::make_pair(d, tag), first).second)
+      if (!f.physicals.emplace(std::make_pair(d, tag), std::move(tags)).second)
         src.fail(at, "duplicate entity (dimension " + std::to_string(d) + ", tag " +
                          std::to_string(tag) + ")");
     }
@@ -1140,8 +1147,7 @@ void add_gmsh_tags(const MshFile &f, int dim, Mesh &m) {
     for (std::size_t c = 0; c < s.size(); ++c) {
       if (c == 0 || s.geom[c] != last_geom) {
         last_geom = s.geom[c];
-        const auto it = f.first_physical.find({dim, last_geom});
-        p = it == f.first_physical.end() ? 0 : it->second;
+        p = f.first_physical(dim, last_geom);
       }
       any_phys |= p != 0;
       phys.values.push_back(double(p));
@@ -1289,21 +1295,32 @@ void add_entities(Source &src, const MshFile &f, const std::vector<VertexId> &ve
     DataArray phys{"gmsh:physical", 1, {}, ValueType::Int32};
     DataArray geom{"gmsh:geometrical", 1, {}, ValueType::Int32};
     std::vector<std::size_t> source; // the element of each entity
-    for (std::size_t e = 0; e < s.size(); ++e) {
-      long long p = 0;
-      if (f.version == 22) {
-        p = f.tags22[d] ? s.phys[e] : 0;
-      } else {
-        const auto it = f.first_physical.find({d, s.geom[e]});
-        p = it == f.first_physical.end() ? 0 : it->second;
-      }
-      if (p == 0)
-        continue;
+    auto add = [&](std::size_t e, long long p) {
       for (std::size_t k = 0; k < nvs; ++k)
         block.vertices.push_back(vertex_of[s.nodes[e * nvs + k]]); // kNoVertex: not a face
       phys.values.push_back(double(p));
       geom.values.push_back(double(s.geom[e]));
       source.push_back(e);
+    };
+    if (f.version == 22) {
+      // An element in two groups is in the file twice, once with each tag.
+      if (f.tags22[d])
+        for (std::size_t e = 0; e < s.size(); ++e)
+          if (s.phys[e] != 0)
+            add(e, s.phys[e]);
+    } else {
+      // An entity in several physical groups: its elements once per group,
+      // a run of the entity's elements for each tag in turn (as a 2.2 file
+      // lists them), so that every group keeps all of its faces.
+      static const std::vector<long long> kNone;
+      for (std::size_t lo = 0, hi; lo < s.size(); lo = hi) {
+        for (hi = lo + 1; hi < s.size() && s.geom[hi] == s.geom[lo];)
+          ++hi;
+        const auto it = f.physicals.find({d, s.geom[lo]});
+        for (long long p : it == f.physicals.end() ? kNone : it->second)
+          for (std::size_t e = lo; e < hi; ++e)
+            add(e, p);
+      }
     }
     if (source.empty())
       continue;

@@ -241,6 +241,56 @@ assert {k: list(v) for k, v in m.field_data.items()} == {
 assert sorted(meshio.read("dup2.msh").field_data) == ["domain", "domain (2D, tag 2)", "wall"]
 PY
 /usr/bin/python3 dup.py || fail "a 2D and a 3D group of one name: VTK or meshio reads dup.vtu wrongly"
+# A surface in two physical groups (Gmsh 4.1 lists both tags on the
+# entity): each group keeps all of its faces through refine, in the .msh and
+# the .vtu, as Gmsh's 2.2 output of the same model gives (each triangle once
+# per group). The cells' entity keeps its first group.
+cat >groups2.geo <<'GEO'
+SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 1, 1, 1};
+Physical Volume("solid", 10) = {1};
+Physical Surface("left", 1) = {1};
+Physical Surface("walls", 2) = {1, 2, 3};
+Mesh.MeshSizeMax = 0.5;
+GEO
+gmsh groups2.geo -3 -format msh41 -o groups41.msh >gmsh.log 2>&1 || fail "gmsh groups2.geo: $(tail -1 gmsh.log)"
+gmsh groups2.geo -3 -format msh22 -o groups22.msh >gmsh.log 2>&1 || fail "gmsh groups2.geo (2.2): $(tail -1 gmsh.log)"
+for v in 41 22; do
+  expect_exit 0 "$BISECT" refine groups$v.msh --region corner-box.json -n 2 -o groups$v-r.msh -q --quality-csv none
+  expect_exit 0 "$BISECT" refine groups$v.msh --region corner-box.json -n 2 -o groups$v-r.vtu -q --quality-csv none
+done
+cat >groups2.py <<'PY'
+import collections
+import sys
+import meshio
+import vtk
+
+def groups(name):
+    m = meshio.read(name)
+    n = collections.Counter()
+    for block, tags in zip(m.cells, m.cell_data["gmsh:physical"]):
+        for t in set(tags.tolist()):
+            n[(block.type, int(t))] += int((tags == t).sum())
+    return n
+
+for v in ("41", "22"):
+    src = groups("groups%s.msh" % v)
+    if v == "22":  # Gmsh's own 2.2 file: each triangle of surface 1 in both groups
+        assert src[("triangle", 2)] == 3 * src[("triangle", 1)], src
+    for out in ("groups%s-r.msh" % v, "groups%s-r.vtu" % v):
+        g = groups(out)
+        left, walls = g[("triangle", 1)], g[("triangle", 2)]
+        # walls = surface 1 (all of left) + surfaces 2 and 3, each refined alike
+        assert left > 0 and walls > left, (out, g)
+        if out.startswith("groups41"):
+            same = groups(out.replace("41", "22"))
+            assert g == same, (out, g, same)
+r = vtk.vtkXMLUnstructuredGridReader()
+r.SetFileName("groups41-r.vtu")
+r.Update()
+assert r.GetOutput().GetNumberOfCells() == sum(groups("groups41-r.vtu").values())
+PY
+/usr/bin/python3 groups2.py || fail "a surface in two physical groups lost one of them"
 # Cells with gmsh:physical 0 (no group) beside cells of a group: the .msh
 # writes the tag 0 for their entity, since meshio refuses a file where some
 # blocks have gmsh:physical and others not.
@@ -269,4 +319,5 @@ expect_exit 0 "$BISECT" check zero.msh --against zero.vtu
 cells=$("$BISECT" info zero.msh | sed -n 's/^cells: //p')
 /usr/bin/python3 zero.py check "$cells" || fail "gmsh:physical 0 beside a group: meshio does not read zero.msh"
 echo "entities: box and square groups kept through refine, coarsen, meshio's XDMF and Gmsh 2.2;"
+echo "entities: a surface in two physical groups keeps both (Gmsh 4.1 and 2.2)"
 echo "entities: refine -> XDMF -> refine keeps the groups by tag, and the names with the README's workaround"

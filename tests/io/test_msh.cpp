@@ -524,6 +524,36 @@ TEST_CASE("msh: 2.2 elements with two tags give physical and geometrical arrays"
   fs::remove(untagged);
 }
 
+TEST_CASE("msh: a 4.1 entity in several physical groups gives its faces once per group", "[io]") {
+  // The boundary line's entity 5 in groups 9 and 4 (9 listed twice), as
+  // Gmsh writes `Physical Curve(9) = {5}; Physical Curve(4) = {5};`. A 2.2
+  // file lists such an element once per group; the 4.1 reader must keep the
+  // line in both groups, not only the first.
+  const std::string path =
+      write_file("square41_groups.msh",
+                 replaced(kSquare41, "5 0 0 0 1 0 0 1 9 0\n", "5 0 0 0 1 0 0 3 9 4 9 0\n"));
+  const Mesh m = read_msh(path);
+  REQUIRE(m.entities.size() == 1);
+  const Entities &lines = m.entities[0];
+  REQUIRE(lines.dim == 1);
+  REQUIRE(lines.vertices.size() == 4); // the one line, twice
+  CHECK(lines.vertices[0] == lines.vertices[2]);
+  CHECK(lines.vertices[1] == lines.vertices[3]);
+  CHECK(find_array(lines.data, "gmsh:physical")->values == std::vector<double>{9, 4});
+  CHECK(find_array(lines.data, "gmsh:geometrical")->values == std::vector<double>{5, 5});
+  // The cells keep their entity's first group (a cell is in the mesh once).
+  CHECK(find_array(m.cell_data, "gmsh:physical")->values == std::vector<double>{42, 42});
+  // Both groups survive a write and a read.
+  const std::string again = temp_path("square41_groups_again.msh");
+  write_msh(again, m);
+  const Mesh back = read_msh(again);
+  REQUIRE(back.entities.size() == 1);
+  CHECK(find_array(back.entities[0].data, "gmsh:physical")->values == std::vector<double>{9, 4});
+  CHECK(back.entities[0].vertices.size() == 4);
+  fs::remove(path);
+  fs::remove(again);
+}
+
 TEST_CASE("msh: triangles off z = 0 are fine as the boundary of tetrahedra", "[io]") {
   const std::string path =
       write_file("tet.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"
