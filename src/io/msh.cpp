@@ -910,7 +910,8 @@ void read_elements41(Source &src, MshFile &f) {
 }
 
 // 4.1 $Entities: remembers the physical tags of every entity (an entity in
-// several physical groups lists them all).
+// several physical groups lists them all), at most kMaxGroupsPerEntity.
+constexpr std::size_t kMaxGroupsPerEntity = 64;
 void read_entities41(Source &src, MshFile &f) {
   std::uint64_t counts[4];
   for (std::uint64_t &c : counts)
@@ -925,8 +926,15 @@ void read_entities41(Source &src, MshFile &f) {
       std::vector<long long> tags;
       for (std::uint64_t j = 0; j < nphys; ++j) {
         const long long p = int41(src, "physical tag");
-        if (p != 0 && std::find(tags.begin(), tags.end(), p) == tags.end())
-          tags.push_back(p);
+        if (p == 0 || std::find(tags.begin(), tags.end(), p) != tags.end())
+          continue;
+        // The entity's elements are kept once per group (add_entities): a
+        // bound on the groups bounds what a small file can make us hold.
+        if (tags.size() == kMaxGroupsPerEntity)
+          src.fail(at, "entity (dimension " + std::to_string(d) + ", tag " + std::to_string(tag) +
+                           ") is in more than " + std::to_string(kMaxGroupsPerEntity) +
+                           " physical groups");
+        tags.push_back(p);
       }
       if (d > 0) {
         const std::uint64_t nb = size41(src, "the number of bounding entities");

@@ -550,8 +550,28 @@ TEST_CASE("msh: a 4.1 entity in several physical groups gives its faces once per
   REQUIRE(back.entities.size() == 1);
   CHECK(find_array(back.entities[0].data, "gmsh:physical")->values == std::vector<double>{9, 4});
   CHECK(back.entities[0].vertices.size() == 4);
+  // An entity in 64 groups is kept 64 times; in 65, the file is refused with
+  // one line (each group multiplies what the entity's elements hold).
+  std::string tags;
+  for (int t = 1; t <= 65; ++t) {
+    tags += ' ';
+    tags += std::to_string(t);
+  }
+  const std::string many =
+      write_file("square41_many.msh",
+                 replaced(kSquare41, "5 0 0 0 1 0 0 1 9 0\n", "5 0 0 0 1 0 0 65" + tags + " 0\n"));
+  CHECK_THAT(read_error(many), Contains(many) && Contains("line 10") &&
+                                   Contains("entity (dimension 1, tag 5)") &&
+                                   Contains("more than 64 physical groups"));
+  const std::string sixty_four =
+      write_file("square41_64.msh",
+                 replaced(kSquare41, "5 0 0 0 1 0 0 1 9 0\n",
+                          "5 0 0 0 1 0 0 66" + tags.substr(0, tags.rfind(' ')) + " 1 2 0\n"));
+  CHECK(read_msh(sixty_four).entities.at(0).vertices.size() == 2 * 64);
   fs::remove(path);
   fs::remove(again);
+  fs::remove(many);
+  fs::remove(sixty_four);
 }
 
 TEST_CASE("msh: triangles off z = 0 are fine as the boundary of tetrahedra", "[io]") {
