@@ -16,6 +16,7 @@
 #include "measure/check_testing.hpp"
 
 #include "bisect/measure.hpp"
+#include "bisect/text.hpp"
 #include "bisect/threads.hpp"
 
 #include <algorithm>
@@ -26,10 +27,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <mutex>
 #include <new>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <sys/mman.h>
@@ -1762,6 +1765,43 @@ std::string find_duplicate_vertices(const Mesh &mesh) {
          (pairs > 1 ? " (and " + std::to_string(pairs - 1) + " more pairs)" : std::string()) +
          "; the cells on either side do not share them, so the mesh is not connected there "
          "(merge coincident nodes, e.g. with Gmsh's Coherence Mesh)";
+}
+
+// Two cells with the same vertices, asked only when a check has failed (a
+// repeated cell makes its facets "shared by 4 cells"): the first pair by
+// index, with their gmsh:physical tags when the mesh has them, since Gmsh's
+// 2.2 format repeats an element once for each physical group it is in.
+std::string find_duplicate_cells(const Mesh &mesh) {
+  const std::size_t nc = mesh.num_cells(), n = std::size_t(mesh.cell_size());
+  std::vector<VertexId> sorted(mesh.cells.begin(), mesh.cells.end());
+  for (std::size_t c = 0; c < nc; ++c)
+    std::sort(sorted.begin() + std::ptrdiff_t(c * n), sorted.begin() + std::ptrdiff_t((c + 1) * n));
+  std::vector<CellId> order(nc);
+  std::iota(order.begin(), order.end(), CellId(0));
+  auto key = [&](CellId c) { return sorted.begin() + std::ptrdiff_t(std::size_t(c) * n); };
+  std::sort(order.begin(), order.end(), [&](CellId a, CellId b) {
+    const int cmp = std::memcmp(&*key(a), &*key(b), n * sizeof(VertexId)); // any fixed order
+    return cmp != 0 ? cmp < 0 : a < b;
+  });
+  std::size_t pairs = 0;
+  CellId a = 0, b = 0;
+  for (std::size_t i = 1; i < nc; ++i)
+    if (std::equal(key(order[i]), key(order[i]) + std::ptrdiff_t(n), key(order[i - 1])) &&
+        (pairs++ == 0 || std::make_pair(order[i - 1], order[i]) < std::make_pair(a, b)))
+      a = order[i - 1], b = order[i];
+  if (pairs == 0)
+    return {};
+  std::string tags, why;
+  for (const DataArray &d : mesh.cell_data)
+    if (d.name == "gmsh:physical" && d.components == 1 && d.values.size() == nc &&
+        d.values[a] != d.values[b]) {
+      tags = format(", with gmsh:physical %.17g and %.17g", d.values[a], d.values[b], 0);
+      why = ": Gmsh's .msh 2.2 repeats an element for each physical group it is in, and a cell "
+            "is in one group here; give the region one Physical group, or save as .msh 4.1, "
+            "where a cell keeps its entity's first group";
+    }
+  return "duplicate cells: " + cell_pair_name(mesh, a, b) + " have the same vertices" + tags +
+         (pairs > 1 ? " (and " + with_commas(pairs - 1) + " more pairs)" : std::string()) + why;
 }
 
 // Cells overlapping without sharing a facet (which the facet pass cannot see):
@@ -3695,6 +3735,8 @@ void prepare_input(Mesh &mesh, const std::string &path, const LoadProgress &prog
   // (exported without merging nodes: zero-volume cells, hanging nodes, ...)
   // is reported by its duplicates, the cause; looked for only on failure.
   auto reject = [&](const std::string &what) {
+    if (std::string d = find_duplicate_cells(mesh); !d.empty())
+      throw InputError(path, d);
     if (std::string d = find_duplicate_vertices(mesh); !d.empty())
       throw InputError(path, d);
     throw InputError(path, what);

@@ -291,6 +291,29 @@ r.Update()
 assert r.GetOutput().GetNumberOfCells() == sum(groups("groups41-r.vtu").values())
 PY
 /usr/bin/python3 groups2.py || fail "a surface in two physical groups lost one of them"
+# A volume in two physical groups: Gmsh's 2.2 file lists every tet twice,
+# refused with one line that says why and what to do; its 4.1 file lists the
+# tets once, and they keep the first group.
+cat >vol2.geo <<'GEO'
+SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 1, 1, 1};
+Physical Volume("steel", 10) = {1};
+Physical Volume("all", 11) = {1};
+Mesh.MeshSizeMax = 0.5;
+GEO
+gmsh vol2.geo -3 -format msh22 -o vol22.msh >gmsh.log 2>&1 || fail "gmsh vol2.geo: $(tail -1 gmsh.log)"
+gmsh vol2.geo -3 -format msh41 -o vol41.msh >gmsh.log 2>&1 || fail "gmsh vol2.geo (4.1): $(tail -1 gmsh.log)"
+expect_exit 1 "$BISECT" refine vol22.msh --region corner-box.json -o vol22-r.vtu
+one_line_naming vol22.msh
+grep -q "duplicate cells: elements .* have the same vertices, with gmsh:physical 10 and 11" "$WORK/err" ||
+  fail "vol22.msh: the message does not name the repeated elements and their groups: $(cat "$WORK/err")"
+[[ ! -e vol22-r.vtu ]] || fail "vol22.msh: a refused input wrote output"
+expect_exit 0 "$BISECT" refine vol41.msh --region corner-box.json -o vol41-r.msh -q --quality-csv none
+/usr/bin/python3 -c '
+import meshio
+m = meshio.read("vol41-r.msh")
+tags = {int(t) for c, a in zip(m.cells, m.cell_data["gmsh:physical"]) if c.type == "tetra" for t in a}
+assert tags == {10}, tags' || fail "vol41.msh: the tets do not keep their first group"
 # Cells with gmsh:physical 0 (no group) beside cells of a group: the .msh
 # writes the tag 0 for their entity, since meshio refuses a file where some
 # blocks have gmsh:physical and others not.

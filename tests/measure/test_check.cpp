@@ -105,6 +105,33 @@ TEST_CASE("check: a Kuhn mesh passes against its own invariants, also after rela
   CHECK(res.ok);
 }
 
+TEST_CASE("check: a cell listed twice is reported as such, with its Gmsh groups",
+          "[check][2d][3d][4d]") {
+  const int dim = GENERATE(2, 3, 4);
+  Mesh m = generate_kuhn(dim, 2);
+  const std::size_t nc = m.num_cells(), n = std::size_t(dim + 1);
+  // Cells 3 and 5 again, the second with its vertices in another order.
+  for (CellId c : {CellId(3), CellId(5)}) {
+    std::vector<VertexId> again(m.cell(c), m.cell(c) + n);
+    if (c == 5)
+      std::reverse(again.begin(), again.end());
+    m.cells.insert(m.cells.end(), again.begin(), again.end());
+  }
+  INFO("dim " << dim);
+  CHECK(prepare_error(m, "twice.vtu") == "twice.vtu: duplicate cells: cells 3 and " +
+                                             std::to_string(nc) +
+                                             " have the same vertices (and 1 more pairs)");
+  // As Gmsh's .msh 2.2 writes a volume in two physical groups.
+  DataArray phys{"gmsh:physical", 1, std::vector<double>(nc + 2, 10.0)};
+  phys.values[nc] = phys.values[nc + 1] = 11;
+  m.cell_data.push_back(phys);
+  const std::string e = prepare_error(m, "vol.msh");
+  CHECK_THAT(e, StartsWith("vol.msh: duplicate cells: cells 3 and " + std::to_string(nc) +
+                           " have the same vertices, with gmsh:physical 10 and 11 (and 1 more "
+                           "pairs): Gmsh's .msh 2.2 repeats an element"));
+  CHECK_THAT(e, Contains("save as .msh 4.1"));
+}
+
 TEST_CASE("check: a facet shared by three cells is found", "[check][2d][3d][4d]") {
   SECTION("2D by hand") {
     Mesh m = make_mesh(2, {0, 0, 1, 0, 0.5, 1, 0.5, -1, 0.5, 2}, {0, 1, 2, 1, 0, 3, 0, 1, 4});

@@ -85,7 +85,7 @@ run_mpi 3 refine hypercube.vtu --region "$R/moving-sphere.json" -n 5 -o p.pvtu -
 sed 's#\(<Piece Source="p_0.vtu"/>\)#\1\n    \1#' p.pvtu >twice.pvtu
 for p in 1 2; do
   expect_exit 1 run_mpi $p refine twice.pvtu --region "$R/moving-sphere.json" -o x.pvtu -f
-  one_bisect_line_naming "twice.pvtu: non-manifold"
+  one_bisect_line_naming "twice.pvtu: duplicate cells"
   grep -qF "where the pieces meet" "$WORK/err" || { cat "$WORK/err" >&2; fail "the message does not say where"; }
   [[ ! -e x.pvtu && ! -e x_0.vtu ]] || fail "a refused read wrote output"
 done
