@@ -241,20 +241,22 @@ assert {k: list(v) for k, v in m.field_data.items()} == {
 assert sorted(meshio.read("dup2.msh").field_data) == ["domain", "domain (2D, tag 2)", "wall"]
 PY
 /usr/bin/python3 dup.py || fail "a 2D and a 3D group of one name: VTK or meshio reads dup.vtu wrongly"
+# gmsh_box NAME GROUPS: the unit box with the Physical lines GROUPS, meshed
+# by Gmsh into NAME41.msh and NAME22.msh.
+gmsh_box() {
+  printf 'SetFactory("OpenCASCADE");\nBox(1) = {0, 0, 0, 1, 1, 1};\n%s\nMesh.MeshSizeMax = 0.5;\n' \
+    "$2" >"$1.geo"
+  for v in 41 22; do
+    gmsh "$1.geo" -3 -format msh$v -o "$1$v.msh" >gmsh.log 2>&1 || fail "gmsh $1.geo (msh$v): $(tail -1 gmsh.log)"
+  done
+}
 # A surface in two physical groups (Gmsh 4.1 lists both tags on the
 # entity): each group keeps all of its faces through refine, in the .msh and
 # the .vtu, as Gmsh's 2.2 output of the same model gives (each triangle once
 # per group). The cells' entity keeps its first group.
-cat >groups2.geo <<'GEO'
-SetFactory("OpenCASCADE");
-Box(1) = {0, 0, 0, 1, 1, 1};
-Physical Volume("solid", 10) = {1};
+gmsh_box groups 'Physical Volume("solid", 10) = {1};
 Physical Surface("left", 1) = {1};
-Physical Surface("walls", 2) = {1, 2, 3};
-Mesh.MeshSizeMax = 0.5;
-GEO
-gmsh groups2.geo -3 -format msh41 -o groups41.msh >gmsh.log 2>&1 || fail "gmsh groups2.geo: $(tail -1 gmsh.log)"
-gmsh groups2.geo -3 -format msh22 -o groups22.msh >gmsh.log 2>&1 || fail "gmsh groups2.geo (2.2): $(tail -1 gmsh.log)"
+Physical Surface("walls", 2) = {1, 2, 3};'
 for v in 41 22; do
   expect_exit 0 "$BISECT" refine groups$v.msh --region corner-box.json -n 2 -o groups$v-r.msh -q --quality-csv none
   expect_exit 0 "$BISECT" refine groups$v.msh --region corner-box.json -n 2 -o groups$v-r.vtu -q --quality-csv none
@@ -294,15 +296,8 @@ PY
 # A volume in two physical groups: Gmsh's 2.2 file lists every tet twice,
 # refused with one line that says why and what to do; its 4.1 file lists the
 # tets once, and they keep the first group.
-cat >vol2.geo <<'GEO'
-SetFactory("OpenCASCADE");
-Box(1) = {0, 0, 0, 1, 1, 1};
-Physical Volume("steel", 10) = {1};
-Physical Volume("all", 11) = {1};
-Mesh.MeshSizeMax = 0.5;
-GEO
-gmsh vol2.geo -3 -format msh22 -o vol22.msh >gmsh.log 2>&1 || fail "gmsh vol2.geo: $(tail -1 gmsh.log)"
-gmsh vol2.geo -3 -format msh41 -o vol41.msh >gmsh.log 2>&1 || fail "gmsh vol2.geo (4.1): $(tail -1 gmsh.log)"
+gmsh_box vol 'Physical Volume("steel", 10) = {1};
+Physical Volume("all", 11) = {1};'
 expect_exit 1 "$BISECT" refine vol22.msh --region corner-box.json -o vol22-r.vtu
 one_line_naming vol22.msh
 grep -q "duplicate cells: elements .* have the same vertices, with gmsh:physical 10 and 11" "$WORK/err" ||
