@@ -261,6 +261,10 @@ for v in 41 22; do
   expect_exit 0 "$BISECT" refine groups$v.msh --region corner-box.json -n 2 -o groups$v-r.msh -q --quality-csv none
   expect_exit 0 "$BISECT" refine groups$v.msh --region corner-box.json -n 2 -o groups$v-r.vtu -q --quality-csv none
 done
+# Coarsened all the way back, and the refined file as Gmsh reads it (saved
+# again by Gmsh as 2.2, which lists each element once per group).
+expect_exit 0 "$BISECT" coarsen groups41-r.msh --all -n 0 -o groups41-back.msh -q
+gmsh groups41-r.msh -0 -format msh22 -o groups41-gmsh.msh >gmsh.log 2>&1 || fail "gmsh cannot read groups41-r.msh: $(tail -1 gmsh.log)"
 cat >groups2.py <<'PY'
 import collections
 import sys
@@ -287,6 +291,10 @@ for v in ("41", "22"):
         if out.startswith("groups41"):
             same = groups(out.replace("41", "22"))
             assert g == same, (out, g, same)
+# Coarsening gives Gmsh's own groups back: each face of surface 1 in both.
+assert groups("groups41-back.msh") == groups("groups22.msh"), groups("groups41-back.msh")
+# Gmsh puts the refined faces in both groups too.
+assert groups("groups41-gmsh.msh") == groups("groups41-r.msh"), groups("groups41-gmsh.msh")
 r = vtk.vtkXMLUnstructuredGridReader()
 r.SetFileName("groups41-r.vtu")
 r.Update()
